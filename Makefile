@@ -1,0 +1,49 @@
+# hgrasp: `make run` and `make test` take a fresh Debian 12 machine from clone to result.
+# deps   installs the Debian packages that are missing (idempotent; sudo only when not root)
+# build  configures and builds (Release) in build/
+# run    builds, then runs the default scenario headless into out/default/
+# test   builds, then runs every test (ctest)
+# bench  builds, then runs the benchmarks in tests/bench/
+
+JOBS     ?= 2
+BUILD    ?= build
+SCENARIO ?= scenarios/default.yaml
+OUT      ?= out/default
+
+PACKAGES := build-essential cmake pkg-config git \
+	libmujoco-dev libeigen3-dev libopencv-dev liburdfdom-dev liburdfdom-tools \
+	libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
+	libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri \
+	libgtest-dev libgmock-dev libbenchmark-dev
+
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: deps build run test bench clean
+
+deps:
+	@missing=$$(for p in $(PACKAGES); do \
+	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; \
+	done); \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:" $$missing; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+	else echo "deps: all packages present"; fi
+
+$(BUILD)/CMakeCache.txt:
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+
+build: deps $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j$(JOBS)
+
+run: build
+	./$(BUILD)/hgrasp render $(SCENARIO) --out $(OUT)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+
+bench: build
+	./$(BUILD)/tests/bench/hgrasp_bench --benchmark_counters_tabular=true
+
+clean:
+	rm -rf $(BUILD) out

@@ -1,0 +1,32 @@
+#include "common/error.h"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace hgrasp {
+namespace {
+std::string Compose(const std::string& file, const std::string& field, const std::string& value,
+                    const std::string& expected) {
+  std::string msg;
+  if (!file.empty()) msg += file + ": ";
+  if (!field.empty()) msg += field + ": ";
+  msg += value.empty() ? std::string("missing or empty") : "got '" + value + "'";
+  if (!expected.empty()) msg += "; expected " + expected;
+  return msg;
+}
+}  // namespace
+
+InputError::InputError(std::string file, std::string field, std::string value,
+                       std::string expected)
+    : std::runtime_error(Compose(file, field, value, expected)),
+      file_(std::move(file)),
+      field_(std::move(field)),
+      value_(std::move(value)) {}
+
+void DemandFailed(const char* condition, const char* file, int line, const std::string& detail) {
+  std::fprintf(stderr, "hgrasp: internal invariant failed at %s:%d: %s %s\n", file, line,
+               condition, detail.c_str());
+  std::abort();
+}
+
+}  // namespace hgrasp

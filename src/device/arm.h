@@ -1,0 +1,43 @@
+#pragma once
+/// @file A Puma 260 arm as its controller (VAL II) presents it.
+
+#include <Eigen/Core>
+
+#include "common/geometry.h"
+#include "device/status.h"
+
+namespace hgrasp::device {
+
+using Joint6 = Eigen::Matrix<double, 6, 1>;  ///< joint angles (rad) or rates (rad/s), DH order
+
+struct ArmState {
+  double t_s = 0.0;               ///< time the joints were read (s, device clock)
+  Joint6 q = Joint6::Zero();      ///< joint angles (rad), models/humanoid.urdf convention
+  Joint6 qd = Joint6::Zero();     ///< joint rates (rad/s)
+  bool moving = false;            ///< a commanded motion is still under way
+};
+
+/// One arm. Commands return at once; motion happens under the controller (joint-interpolated,
+/// within the joint speed limits scaled by SetSpeed) and is observed through Read().
+class Arm {
+ public:
+  virtual ~Arm() = default;
+
+  virtual Status Read(ArmState* state) = 0;
+
+  /// Joint-interpolated move to absolute joint angles (rad). VAL II: DO MOVE #PPOINT(...).
+  virtual Status MoveJoints(const Joint6& q_target) = 0;
+
+  /// Move by a differential pose expressed in the current gripper frame E:
+  /// X_EE' = (rotation, translation in m). VAL II: DO MOVE HERE:TRANS(...). The controller
+  /// solves its own inverse kinematics; kRejected when the pose is out of reach.
+  virtual Status MoveRelative(const Pose3& X_EEnew) = 0;
+
+  /// Fraction (0, 1] of the joint speed limits used by later moves. VAL II: SPEED.
+  virtual Status SetSpeed(double fraction) = 0;
+
+  /// Stop where the arm is now.
+  virtual Status Stop() = 0;
+};
+
+}  // namespace hgrasp::device

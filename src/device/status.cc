@@ -1,0 +1,16 @@
+#include "device/status.h"
+
+namespace hgrasp::device {
+
+std::string_view ToString(Status s) {
+  switch (s) {
+    case Status::kOk: return "ok";
+    case Status::kTimeout: return "timeout";
+    case Status::kBadReply: return "bad reply";
+    case Status::kRejected: return "rejected";
+    case Status::kDisconnected: return "disconnected";
+  }
+  return "unknown";
+}
+
+}  // namespace hgrasp::device

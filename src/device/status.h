@@ -1,0 +1,25 @@
+#pragma once
+/// @file Device I/O outcome (DESIGN.md rule 7: I/O failures are returned, not thrown).
+
+#include <string_view>
+
+namespace hgrasp::device {
+
+enum class Status {
+  kOk = 0,
+  kTimeout,       ///< no reply within the device's timeout
+  kBadReply,      ///< a reply arrived but failed its checksum or could not be parsed
+  kRejected,      ///< the device refused the command (out of range, not ready)
+  kDisconnected,  ///< the link is gone
+};
+
+std::string_view ToString(Status s);
+
+inline bool Ok(Status s) { return s == Status::kOk; }
+
+/// Which arm, hand or LED set.
+enum class Side { kLeft = 0, kRight = 1 };
+
+inline std::string_view ToString(Side s) { return s == Side::kLeft ? "left" : "right"; }
+
+}  // namespace hgrasp::device
