@@ -1,0 +1,635 @@
+#include "sim/scenario.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <system_error>
+#include <utility>
+
+#include "common/error.h"
+
+namespace hgrasp::sim {
+
+Pose3 ObjectSpec::X_WO() const {
+  Pose3 X_WO = Pose3::Identity();
+  X_WO.linear() = RotZ(yaw);
+  X_WO.translation() = Eigen::Vector3d(position_W.x(), position_W.y(), size_O.z() / 2.0);
+  return X_WO;
+}
+
+double InterferenceSpec::AngleAt(double t_s) const {
+  double phase = std::fmod(t_s, period_s) / period_s;  // in (-1, 1)
+  if (phase < 0.0) phase += 1.0;
+  const double u = phase < 0.5 ? 2.0 * phase : 2.0 * (1.0 - phase);  // 0 -> 1 -> 0
+  return sweep_min + (sweep_max - sweep_min) * u;
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Footprints on the table.
+
+using Footprint = std::array<Eigen::Vector2d, 4>;
+
+// The four corners of an object's footprint on the table, in W (x, y), counter-clockwise.
+Footprint FootprintOf(const ObjectSpec& o) {
+  const Eigen::Matrix2d R_WO = Eigen::Rotation2Dd(o.yaw).toRotationMatrix();
+  const Eigen::Vector2d half = o.size_O.head<2>() / 2.0;
+  constexpr double kSx[4] = {1, -1, -1, 1}, kSy[4] = {1, 1, -1, -1};
+  Footprint corners;
+  for (int i = 0; i < 4; ++i) {
+    corners[i] = o.position_W + R_WO * Eigen::Vector2d(kSx[i] * half.x(), kSy[i] * half.y());
+  }
+  return corners;
+}
+
+// Separating axis test on two convex quadrilaterals: true when their interiors intersect.
+// Footprints that merely touch (within 1 nm) do not overlap.
+bool FootprintsOverlap(const Footprint& a, const Footprint& b) {
+  constexpr double kTouch = 1e-9;  // m
+  for (const Footprint* poly : {&a, &b}) {
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector2d edge = (*poly)[(i + 1) % 4] - (*poly)[i];
+      const Eigen::Vector2d axis = Eigen::Vector2d(-edge.y(), edge.x()).normalized();
+      double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
+      double b_min = a_min, b_max = -a_min;
+      for (int k = 0; k < 4; ++k) {
+        a_min = std::min(a_min, axis.dot(a[k]));
+        a_max = std::max(a_max, axis.dot(a[k]));
+        b_min = std::min(b_min, axis.dot(b[k]));
+        b_max = std::max(b_max, axis.dot(b[k]));
+      }
+      if (a_max <= b_min + kTouch || b_max <= a_min + kTouch) return false;
+    }
+  }
+  return true;
+}
+
+std::string Fixed(double v, int digits = 3) {
+  if (std::abs(v) < 0.5 * std::pow(10.0, -digits)) v = 0.0;  // no "-0.000"
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(digits);
+  s << v;
+  return s.str();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scalars, strictly: a number is a plain (unquoted) decimal scalar, finite; no YAML 1.1 octal or
+// hexadecimal, no .inf or .nan.
+
+bool IsQuoted(const YAML::Node& n) { return n.Tag() == "!"; }
+
+std::optional<double> ParseNumber(const YAML::Node& n) {
+  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  std::string_view s = n.Scalar();
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty() || s.front() == '+') return std::nullopt;
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::optional<std::uint64_t> ParseUnsigned(const YAML::Node& n) {
+  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  std::string_view s = n.Scalar();
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty() || s.front() < '0' || s.front() > '9') return std::nullopt;
+  std::uint64_t v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+std::optional<bool> ParseBool(const YAML::Node& n) {
+  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  const std::string& s = n.Scalar();
+  if (s == "true" || s == "True" || s == "TRUE") return true;
+  if (s == "false" || s == "False" || s == "FALSE") return false;
+  return std::nullopt;
+}
+
+void RenderTo(const YAML::Node& n, bool top, std::string* out) {
+  if (!n.IsDefined() || n.IsNull()) return;
+  if (n.IsScalar()) {
+    *out += !top && IsQuoted(n) ? "\"" + n.Scalar() + "\"" : n.Scalar();
+  } else if (n.IsSequence()) {
+    *out += "[";
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      if (i > 0) *out += ", ";
+      RenderTo(n[i], false, out);
+    }
+    *out += "]";
+  } else if (n.IsMap()) {
+    *out += "{";
+    bool first = true;
+    for (const auto& kv : n) {
+      if (!first) *out += ", ";
+      first = false;
+      RenderTo(kv.first, false, out);
+      *out += ": ";
+      RenderTo(kv.second, false, out);
+    }
+    *out += "}";
+  }
+}
+
+// A node as the user wrote it, for error messages: a scalar verbatim, a collection in flow style
+// with its quoted strings in quotes; null or missing as "" (InputError says "missing or empty").
+std::string Render(const YAML::Node& n) {
+  std::string text;
+  RenderTo(n, true, &text);
+  constexpr std::size_t kMaxChars = 100;
+  if (text.size() > kMaxChars) text = text.substr(0, kMaxChars - 3) + "...";
+  return text;
+}
+
+// Said after "expected ..." when a number or flag was written in quotes.
+std::string QuoteHint(const YAML::Node& n) {
+  bool quoted = n.IsScalar() && IsQuoted(n);
+  if (n.IsSequence()) {
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      quoted = quoted || (n[i].IsScalar() && IsQuoted(n[i]));
+    }
+  }
+  return quoted ? " (numbers and true/false go without quotes)" : "";
+}
+
+std::string Join(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+std::string Index(const std::string& path, std::size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+using Keys = std::vector<std::string_view>;
+
+std::string OneOf(const Keys& names) {
+  std::string s = "one of: ";
+  for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + std::string(names[i]);
+  return s;
+}
+
+bool IsIdentifier(const std::string& s) {
+  if (s.empty()) return false;
+  for (char c : s) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '_' || c == '-' || c == '.';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+// One key: value pair of a map, by key.
+struct Entry {
+  YAML::Node key, value;
+};
+using Entries = std::map<std::string, Entry>;
+
+// An object's nodes needed again for the checks across objects. Assigned once each: assigning
+// to a YAML::Node that already refers to a node would overwrite that node, not rebind.
+struct ObjectNodes {
+  YAML::Node name, position;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The parser: every check names "FILE:LINE", the field path, the value and what was expected.
+
+class Parser {
+ public:
+  explicit Parser(std::string path) : path_(std::move(path)) {}
+
+  Scenario Parse(const std::string& text);
+
+ private:
+  std::string Where(const YAML::Mark& mark) const {
+    if (mark.line < 0) return path_;
+    return path_ + ":" + std::to_string(mark.line + 1);
+  }
+
+  [[noreturn]] void Fail(const YAML::Mark& mark, const std::string& field, const std::string& value,
+                         const std::string& expected) const {
+    throw InputError(Where(mark), field, value, expected);
+  }
+
+  [[noreturn]] void Fail(const YAML::Node& at, const std::string& field,
+                         const std::string& expected) const {
+    Fail(at.Mark(), field, Render(at), expected);
+  }
+
+  // Checks that `n` is a map whose keys are all in `allowed`, each once; returns its entries.
+  Entries MapOf(const YAML::Node& n, const std::string& field, const Keys& allowed,
+                const std::string& expected) const {
+    if (!n.IsMap()) Fail(n, field, expected);
+    Entries entries;
+    for (const auto& kv : n) {
+      const YAML::Node& key = kv.first;
+      const std::string name = key.IsScalar() ? key.Scalar() : Render(key);
+      bool known = false;
+      for (std::string_view a : allowed) known = known || name == a;
+      if (!key.IsScalar() || !known) {
+        Fail(key.Mark(), Join(field, name), name, "a known key here, " + OneOf(allowed));
+      }
+      if (entries.count(name) != 0) {
+        Fail(key.Mark(), Join(field, name), name,
+             "each key once (it is also on line " +
+                 std::to_string(entries.at(name).key.Mark().line + 1) + ")");
+      }
+      entries.emplace(name, Entry{key, kv.second});
+    }
+    return entries;
+  }
+
+  static const YAML::Node* Find(const Entries& entries, std::string_view key) {
+    const auto it = entries.find(std::string(key));
+    return it == entries.end() ? nullptr : &it->second.value;
+  }
+
+  const YAML::Node& Require(const Entries& entries, const YAML::Node& map, const std::string& field,
+                            std::string_view key, const std::string& expected) const {
+    const YAML::Node* n = Find(entries, key);
+    if (n == nullptr) Fail(map.Mark(), Join(field, key), "", expected);
+    return *n;
+  }
+
+  double Number(const YAML::Node& n, const std::string& field, const std::string& expected) const {
+    const std::optional<double> v = ParseNumber(n);
+    if (!v) Fail(n, field, expected + QuoteHint(n));
+    return *v;
+  }
+
+  // A sequence of exactly `count` numbers.
+  Eigen::VectorXd Numbers(const YAML::Node& n, const std::string& field, std::size_t count,
+                          const std::string& expected) const {
+    if (!n.IsSequence() || n.size() != count) Fail(n, field, expected);
+    Eigen::VectorXd v(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::optional<double> x = ParseNumber(n[i]);
+      if (!x) Fail(n, field, expected + QuoteHint(n));
+      v[static_cast<Eigen::Index>(i)] = *x;
+    }
+    return v;
+  }
+
+  std::string Text(const YAML::Node& n, const std::string& field,
+                   const std::string& expected) const {
+    if (!n.IsScalar() || n.Scalar().empty()) Fail(n, field, expected);
+    return n.Scalar();
+  }
+
+  std::string Name(const YAML::Node& n, const std::string& field) const {
+    const std::string s = Text(n, field, "a name of letters, digits, '_', '-' or '.'");
+    if (!IsIdentifier(s)) Fail(n, field, "a name of letters, digits, '_', '-' or '.'");
+    return s;
+  }
+
+  ObjectSpec ParseObject(const YAML::Node& n, const std::string& field, ObjectNodes* nodes) const;
+  InterferenceSpec ParseInterference(const YAML::Node& n, const std::string& field) const;
+  TaskSpec ParseTask(const YAML::Node& n, const std::string& field, YAML::Node* name_node) const;
+  DeviceSpec ParseDevice(const YAML::Node& n, const std::string& field) const;
+  void CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const;
+
+  std::string path_;
+};
+
+ObjectSpec Parser::ParseObject(const YAML::Node& n, const std::string& field,
+                               ObjectNodes* nodes) const {
+  const Entries e = MapOf(
+      n, field, {"name", "shape", "size", "position", "yaw_deg", "color", "mass", "specular"},
+      "an object: a map with name, shape, size, position, color and optionally yaw_deg, mass, "
+      "specular");
+  ObjectSpec o;
+  nodes->name = Require(e, n, field, "name", "an object name");
+  o.name = Name(nodes->name, Join(field, "name"));
+
+  const YAML::Node& shape = Require(e, n, field, "shape", "a shape: box");
+  o.shape = Text(shape, Join(field, "shape"), "box (the only shape so far)");
+  if (o.shape != "box") Fail(shape, Join(field, "shape"), "box (the only shape so far)");
+
+  const std::string size_field = Join(field, "size");
+  const std::string size_expected = "three positive edge lengths in m";
+  const YAML::Node& size = Require(e, n, field, "size", size_expected + ", as [x, y, z]");
+  o.size_O = Numbers(size, size_field, 3, size_expected + ", as [x, y, z]");
+  if ((o.size_O.array() <= 0.0).any()) Fail(size, size_field, size_expected);
+  if ((o.size_O.array() < kMinObjectEdge).any() || (o.size_O.array() > kMaxObjectEdge).any()) {
+    Fail(size, size_field,
+         "edge lengths between " + Fixed(kMinObjectEdge, 2) + " and " + Fixed(kMaxObjectEdge, 2) +
+             " m");
+  }
+
+  const std::string pos_expected = "the box centre's x, y in W in m, as [x, y]";
+  nodes->position = Require(e, n, field, "position", pos_expected);
+  o.position_W = Numbers(nodes->position, Join(field, "position"), 2, pos_expected);
+
+  if (const YAML::Node* yaw = Find(e, "yaw_deg")) {
+    o.yaw = DegToRad(Number(*yaw, Join(field, "yaw_deg"), "a yaw about W z in degrees"));
+  }
+
+  const std::string color_field = Join(field, "color");
+  const std::string color_expected = "an RGB colour, three numbers 0-1, as [r, g, b]";
+  const YAML::Node& color = Require(e, n, field, "color", color_expected);
+  o.color_rgb = Numbers(color, color_field, 3, color_expected);
+  if ((o.color_rgb.array() < 0.0).any() || (o.color_rgb.array() > 1.0).any()) {
+    Fail(color, color_field, color_expected);
+  }
+
+  if (const YAML::Node* mass = Find(e, "mass")) {
+    o.mass = Number(*mass, Join(field, "mass"), "a positive mass in kg");
+    if (o.mass <= 0.0) Fail(*mass, Join(field, "mass"), "a positive mass in kg");
+  }
+
+  if (const YAML::Node* specular = Find(e, "specular")) {
+    const std::optional<bool> b = ParseBool(*specular);
+    if (!b) Fail(*specular, Join(field, "specular"), "true or false" + QuoteHint(*specular));
+    o.specular = *b;
+  }
+  return o;
+}
+
+InterferenceSpec Parser::ParseInterference(const YAML::Node& n, const std::string& field) const {
+  const Entries e = MapOf(n, field, {"origin", "sweep_deg", "period_s"},
+                          "an interfering laser: a map with origin, sweep_deg, period_s");
+  InterferenceSpec s;
+  const std::string origin_expected = "the source position in W in m, as [x, y, z]";
+  s.origin_W = Numbers(Require(e, n, field, "origin", origin_expected), Join(field, "origin"), 3,
+                       origin_expected);
+
+  const std::string sweep_expected = "the plane's angle range in degrees, as [min, max], min < max";
+  const YAML::Node& sweep = Require(e, n, field, "sweep_deg", sweep_expected);
+  const Eigen::VectorXd sweep_deg = Numbers(sweep, Join(field, "sweep_deg"), 2, sweep_expected);
+  if (sweep_deg[0] >= sweep_deg[1]) Fail(sweep, Join(field, "sweep_deg"), sweep_expected);
+  s.sweep_min = DegToRad(sweep_deg[0]);
+  s.sweep_max = DegToRad(sweep_deg[1]);
+
+  const std::string period_expected = "a positive sweep period in s";
+  const YAML::Node& period = Require(e, n, field, "period_s", period_expected);
+  s.period_s = Number(period, Join(field, "period_s"), period_expected);
+  if (s.period_s <= 0.0) Fail(period, Join(field, "period_s"), period_expected);
+  return s;
+}
+
+TaskSpec Parser::ParseTask(const YAML::Node& n, const std::string& field,
+                           YAML::Node* name_node) const {
+  const Entries e = MapOf(n, field, {"target", "lift"},
+                          "a task: a map with target ({color: ...} or {name: ...}) and lift");
+  TaskSpec t;
+  const std::string target_field = Join(field, "target");
+  const std::string target_expected = "exactly one of color and name, e.g. {color: yellow}";
+  const YAML::Node& target = Require(e, n, field, "target", target_expected);
+  const Entries te = MapOf(target, target_field, {"color", "name"}, target_expected);
+  const YAML::Node* color = Find(te, "color");
+  const YAML::Node* name = Find(te, "name");
+  if ((color == nullptr) == (name == nullptr)) Fail(target, target_field, target_expected);
+  if (color != nullptr) {
+    const std::string color_field = Join(target_field, "color");
+    const std::string color_expected =
+        "a colour name, " + OneOf(Keys(kColorNames.begin(), kColorNames.end()));
+    t.target_color = Text(*color, color_field, color_expected);
+    bool known = false;
+    for (std::string_view c : kColorNames) known = known || t.target_color == c;
+    if (!known) Fail(*color, color_field, color_expected);
+  } else {
+    t.target_name = Name(*name, Join(target_field, "name"));
+    *name_node = *name;
+  }
+
+  if (const YAML::Node* lift = Find(e, "lift")) {
+    const std::string lift_expected = "a lift height in m, > 0 and <= " + Fixed(kMaxLift, 2);
+    t.lift_m = Number(*lift, Join(field, "lift"), lift_expected);
+    if (t.lift_m <= 0.0 || t.lift_m > kMaxLift) Fail(*lift, Join(field, "lift"), lift_expected);
+  }
+  return t;
+}
+
+DeviceSpec Parser::ParseDevice(const YAML::Node& n, const std::string& field) const {
+  const Entries e = MapOf(n, field, {"driver", "params"},
+                          "a device backend: a map with driver and optionally params");
+  DeviceSpec d;
+  const std::string driver_expected = "a driver: sim (the only one so far)";
+  const YAML::Node& driver = Require(e, n, field, "driver", driver_expected);
+  d.driver = Text(driver, Join(field, "driver"), driver_expected);
+  if (d.driver != "sim") Fail(driver, Join(field, "driver"), driver_expected);
+
+  if (const YAML::Node* params = Find(e, "params")) {
+    const std::string params_field = Join(field, "params");
+    if (!params->IsMap()) Fail(*params, params_field, "a map of driver parameters");
+    for (const auto& kv : *params) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : Render(kv.first);
+      if (!kv.first.IsScalar() || key.empty()) {
+        Fail(kv.first.Mark(), params_field, key, "parameter names as plain keys");
+      }
+      if (d.params.count(key) != 0) {
+        Fail(kv.first.Mark(), Join(params_field, key), key, "each parameter once");
+      }
+      if (!kv.second.IsScalar()) {
+        Fail(kv.second, Join(params_field, key), "a single value (text or number)");
+      }
+      d.params.emplace(key, kv.second.Scalar());
+    }
+  }
+  return d;
+}
+
+void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const {
+  std::vector<Footprint> footprints;
+  for (std::size_t i = 0; i < s.objects.size(); ++i) {
+    const ObjectSpec& o = s.objects[i];
+    const std::string field = Index("objects", i);
+    footprints.push_back(FootprintOf(o));
+    constexpr double kTol = 1e-9;
+    for (const Eigen::Vector2d& c : footprints.back()) {
+      if (c.x() < kTableMinX - kTol || c.x() > kTableMaxX + kTol || c.y() < kTableMinY - kTol ||
+          c.y() > kTableMaxY + kTol) {
+        Fail(nodes[i].position, Join(field, "position"),
+             "a footprint inside the table top, x in [" + Fixed(kTableMinX, 2) + ", " +
+                 Fixed(kTableMaxX, 2) + "] m, y in [" + Fixed(kTableMinY, 2) + ", " +
+                 Fixed(kTableMaxY, 2) + "] m (the corner at (" + Fixed(c.x()) + ", " +
+                 Fixed(c.y()) + ") is outside)");
+      }
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (s.objects[j].name == o.name) {
+        Fail(nodes[i].name, Join(field, "name"),
+             "a unique object name (" + Index("objects", j) + " is also called '" + o.name + "')");
+      }
+    }
+  }
+  for (std::size_t i = 0; i < s.objects.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (FootprintsOverlap(footprints[i], footprints[j])) {
+        Fail(nodes[i].position, Join(Index("objects", i), "position"),
+             "a footprint clear of every other object (it overlaps " + Index("objects", j) + " '" +
+                 s.objects[j].name + "')");
+      }
+    }
+  }
+}
+
+Scenario Parser::Parse(const std::string& text) {
+  std::vector<YAML::Node> docs;
+  try {
+    docs = YAML::LoadAll(text);
+  } catch (const YAML::Exception& e) {
+    // The offending line as written, so the user sees what the parser choked on.
+    std::string line;
+    if (e.mark.line >= 0) {
+      std::istringstream in(text);
+      for (int i = 0; i <= e.mark.line && std::getline(in, line); ++i) {
+      }
+      const auto first = line.find_first_not_of(" \t");
+      line = first == std::string::npos ? "" : line.substr(first);
+    }
+    Fail(e.mark, "YAML syntax", line.empty() ? e.msg : line, "well-formed YAML (" + e.msg + ")");
+  }
+
+  const std::string top_expected =
+      "a map of scenario fields: name, seed, camera_noise, lighting, wall, objects, "
+      "interference, task, devices";
+  if (docs.empty() || docs.front().IsNull()) {
+    Fail(YAML::Mark::null_mark(), "top level", "", top_expected + " (the file is empty)");
+  }
+  if (docs.size() > 1) Fail(docs[1].Mark(), "top level", "---", "a single YAML document");
+  const YAML::Node& root = docs.front();
+  if (!root.IsMap()) Fail(root, "top level", top_expected);
+  const Entries e = MapOf(root, "",
+                          {"name", "seed", "camera_noise", "lighting", "wall", "objects",
+                           "interference", "task", "devices"},
+                          top_expected);
+
+  Scenario s;
+  s.path = path_;
+  s.name = Name(Require(e, root, "", "name", "a scenario name"), "name");
+
+  if (const YAML::Node* seed = Find(e, "seed")) {
+    const std::optional<std::uint64_t> v = ParseUnsigned(*seed);
+    if (!v) Fail(*seed, "seed", "a non-negative integer (the random seed)" + QuoteHint(*seed));
+    s.seed = *v;
+  }
+
+  if (const YAML::Node* noise = Find(e, "camera_noise")) {
+    const std::string expected = "a non-negative noise std. dev. in grey levels (0-255)";
+    s.camera_noise = Number(*noise, "camera_noise", expected);
+    if (s.camera_noise < 0.0) Fail(*noise, "camera_noise", expected);
+  }
+
+  if (const YAML::Node* lighting = Find(e, "lighting")) {
+    const Entries le = MapOf(*lighting, "lighting", {"ambient"}, "a map such as {ambient: 0.35}");
+    if (const YAML::Node* ambient = Find(le, "ambient")) {
+      const std::string expected = "an ambient light level 0-1";
+      s.ambient = Number(*ambient, "lighting.ambient", expected);
+      if (s.ambient < 0.0 || s.ambient > 1.0) Fail(*ambient, "lighting.ambient", expected);
+    }
+  }
+
+  std::vector<ObjectNodes> object_nodes;
+  if (const YAML::Node* objects = Find(e, "objects")) {
+    if (!objects->IsSequence()) Fail(*objects, "objects", "a list of objects");
+    for (std::size_t i = 0; i < objects->size(); ++i) {
+      object_nodes.emplace_back();
+      s.objects.push_back(ParseObject((*objects)[i], Index("objects", i), &object_nodes.back()));
+    }
+  }
+
+  YAML::Node wall_x_node;
+  if (const YAML::Node* wall = Find(e, "wall")) {
+    const std::string wall_expected = "a wall plane x in m, > " + Fixed(kMinWallX, 2);
+    const Entries we = MapOf(*wall, "wall", {"x"}, "a map such as {x: 0.9}");
+    wall_x_node = Require(we, *wall, "wall", "x", wall_expected);
+    s.wall_x = Number(wall_x_node, "wall.x", wall_expected);
+    if (*s.wall_x <= kMinWallX) Fail(wall_x_node, "wall.x", wall_expected);
+  }
+
+  if (const YAML::Node* interference = Find(e, "interference")) {
+    if (!interference->IsSequence()) {
+      Fail(*interference, "interference", "a list of interfering lasers");
+    }
+    for (std::size_t i = 0; i < interference->size(); ++i) {
+      s.interference.push_back(ParseInterference((*interference)[i], Index("interference", i)));
+    }
+  }
+
+  YAML::Node target_name_node;
+  if (const YAML::Node* task = Find(e, "task")) {
+    s.task = ParseTask(*task, "task", &target_name_node);
+  }
+
+  if (const YAML::Node* devices = Find(e, "devices")) {
+    const Keys keys(kDeviceKeys.begin(), kDeviceKeys.end());
+    const Entries de = MapOf(*devices, "devices", keys,
+                             "a map from device to backend, e.g. {head: {driver: sim}}");
+    for (const auto& [key, entry] : de) {
+      s.devices.emplace(key, ParseDevice(entry.value, Join("devices", key)));
+    }
+  }
+
+  // Checks across fields.
+  CheckAcrossObjects(s, object_nodes);
+  if (s.wall_x) {
+    for (std::size_t i = 0; i < s.objects.size(); ++i) {
+      for (const Eigen::Vector2d& c : FootprintOf(s.objects[i])) {
+        if (c.x() >= *s.wall_x) {
+          Fail(wall_x_node, "wall.x",
+               "a wall beyond every object (" + Index("objects", i) + " '" + s.objects[i].name +
+                   "' reaches x = " + Fixed(c.x()) + " m)");
+        }
+      }
+    }
+  }
+  if (s.task && !s.task->target_name.empty()) {
+    bool found = false;
+    std::string names;
+    for (const ObjectSpec& o : s.objects) {
+      found = found || o.name == s.task->target_name;
+      names += (names.empty() ? "" : ", ") + o.name;
+    }
+    if (!found) {
+      Fail(target_name_node, "task.target.name",
+           names.empty() ? "the name of an object, but the scenario has none"
+                         : "the name of an object, one of: " + names);
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+Scenario ParseScenario(const std::string& yaml_text, const std::string& path_for_errors) {
+  Parser parser(path_for_errors);
+  try {
+    return parser.Parse(yaml_text);
+  } catch (const YAML::Exception& e) {
+    // Anything yaml-cpp throws beyond a syntax error still leaves as an InputError.
+    const std::string where =
+        e.mark.line < 0 ? path_for_errors : path_for_errors + ":" + std::to_string(e.mark.line + 1);
+    throw InputError(where, "", e.msg, "a valid scenario file");
+  }
+}
+
+Scenario LoadScenario(const std::string& path) {
+  namespace fs = std::filesystem;
+  const std::string expected = "a readable scenario file (YAML)";
+  if (path.empty()) throw InputError("", "scenario file", "", expected);
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) throw InputError(path, "", path, expected + ": no such file");
+  if (fs::is_directory(status)) throw InputError(path, "", path, expected + ", not a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", path, expected + ": " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path, "", path, expected + ": read failed");
+  return ParseScenario(text.str(), path);
+}
+
+}  // namespace hgrasp::sim

@@ -1,0 +1,283 @@
+#include "sim/world.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/error.h"
+#include "common/paths.h"
+#include "robot/kinematic_tree.h"
+
+namespace hgrasp::sim {
+namespace {
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", path, "a readable MJCF model file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Loads MJCF text through MuJoCo's virtual file system (no temporary files).
+mjModel* LoadFromString(const std::string& xml, const std::string& name) {
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  if (mj_makeEmptyFileVFS(&vfs, name.c_str(), static_cast<int>(xml.size())) != 0) {
+    throw std::runtime_error("MuJoCo VFS: cannot hold " + name);
+  }
+  std::memcpy(vfs.filedata[mj_findFileVFS(&vfs, name.c_str())], xml.data(), xml.size());
+  char error[1024] = "";
+  mjModel* m = mj_loadXML(name.c_str(), &vfs, error, sizeof error);
+  mj_deleteVFS(&vfs);
+  if (m == nullptr) throw std::runtime_error("MuJoCo rejected the model " + name + ": " + error);
+  return m;
+}
+
+std::string Num(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+// The scenario's objects (and wall) as MJCF, to go inside <worldbody>.
+std::string ObjectsXml(const Scenario& sc) {
+  std::ostringstream x;
+  for (const ObjectSpec& o : sc.objects) {
+    const Eigen::Vector3d h = 0.5 * o.size_O;
+    const std::string name = "obj_" + o.name;
+    // Start 0.1 mm above the table so the first contact is gentle.
+    x << "<body name=\"" << name << "\" pos=\"" << Num(o.position_W.x()) << " "
+      << Num(o.position_W.y()) << " " << Num(h.z() + 1e-4) << "\" quat=\""
+      << Num(std::cos(0.5 * o.yaw)) << " 0 0 " << Num(std::sin(0.5 * o.yaw)) << "\">"
+      << "<freejoint name=\"" << name << "\"/>"
+      // Explicit inertia of a uniform box: the model may not infer inertia from geoms.
+      << "<inertial pos=\"0 0 0\" mass=\"" << Num(o.mass) << "\" diaginertia=\""
+      << Num(o.mass / 3.0 * (h.y() * h.y() + h.z() * h.z())) << " "
+      << Num(o.mass / 3.0 * (h.x() * h.x() + h.z() * h.z())) << " "
+      << Num(o.mass / 3.0 * (h.x() * h.x() + h.y() * h.y())) << "\"/>"
+      << "<geom name=\"" << name << "\" type=\"box\" size=\"" << Num(h.x()) << " "
+      << Num(h.y()) << " " << Num(h.z()) << "\" rgba=\""
+      << Num(o.color_rgb.x()) << " " << Num(o.color_rgb.y()) << " " << Num(o.color_rgb.z())
+      << " 1\" contype=\"1\" conaffinity=\"1\" friction=\"1 0.005 0.0001\""
+      << (o.specular ? " material=\"specular_" + o.name + "\"" : std::string()) << "/>"
+      << "</body>\n";
+  }
+  if (sc.wall_x) {
+    x << "<geom name=\"wall\" type=\"box\" pos=\"" << Num(*sc.wall_x + 0.01)
+      << " 0 0.5\" size=\"0.01 1.0 0.5\" rgba=\"0.85 0.85 0.82 1\" contype=\"1\""
+         " conaffinity=\"1\"/>\n";
+  }
+  return x.str();
+}
+
+std::string MaterialsXml(const Scenario& sc) {
+  std::ostringstream x;
+  for (const ObjectSpec& o : sc.objects) {
+    if (!o.specular) continue;
+    x << "<material name=\"specular_" << o.name << "\" rgba=\"" << Num(o.color_rgb.x()) << " "
+      << Num(o.color_rgb.y()) << " " << Num(o.color_rgb.z())
+      << " 1\" specular=\"1\" shininess=\"1\"/>\n";
+  }
+  return x.str();
+}
+
+// Inserts `text` before the last occurrence of `tag` in `xml`.
+void InsertBefore(std::string* xml, const std::string& tag, const std::string& text,
+                  const std::string& path) {
+  const size_t at = xml->rfind(tag);
+  if (at == std::string::npos) throw InputError(path, tag, "", "an MJCF file with " + tag);
+  xml->insert(at, text);
+}
+
+// Smooth 0..1 position profile with zero speed at both ends; peak slope 1.5.
+double Smoothstep(double s) { return s * s * (3.0 - 2.0 * s); }
+
+}  // namespace
+
+World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::move(scenario)) {
+  const std::string& model_path = options.model_path;
+  const std::string path = ResolveDataPath(model_path);
+  std::string xml = ReadFile(path);
+
+  // The robot alone first: its keyframe "home" (the composed model has more qpos than the key).
+  mjModel* robot = LoadFromString(xml, "humanoid.xml");
+  mjData* robot_data = mj_makeData(robot);
+  const int home = mj_name2id(robot, mjOBJ_KEY, "home");
+  if (home < 0) {
+    mj_deleteData(robot_data);
+    mj_deleteModel(robot);
+    throw InputError(path, "keyframe", "", "a keyframe named 'home'");
+  }
+  mj_resetDataKeyframe(robot, robot_data, home);
+  std::map<std::string, double> home_q, home_ctrl;
+  for (int j = 0; j < robot->njnt; ++j) {
+    if (robot->jnt_type[j] == mjJNT_HINGE || robot->jnt_type[j] == mjJNT_SLIDE) {
+      home_q[mj_id2name(robot, mjOBJ_JOINT, j)] = robot_data->qpos[robot->jnt_qposadr[j]];
+    }
+  }
+  for (int a = 0; a < robot->nu; ++a) home_ctrl[mj_id2name(robot, mjOBJ_ACTUATOR, a)] = robot_data->ctrl[a];
+  mj_deleteData(robot_data);
+  mj_deleteModel(robot);
+
+  // The keyframes are the robot's alone (their qpos lacks the objects): applied above by name.
+  if (const size_t k0 = xml.find("<keyframe>"), k1 = xml.find("</keyframe>");
+      k0 != std::string::npos && k1 != std::string::npos) {
+    xml.erase(k0, k1 + std::string("</keyframe>").size() - k0);
+  }
+  InsertBefore(&xml, "</worldbody>", ObjectsXml(scenario_) + options.extra_worldbody_xml, path);
+  InsertBefore(&xml, "</mujoco>", "<asset>\n" + MaterialsXml(scenario_) + "</asset>\n", path);
+  model_ = LoadFromString(xml, "scene.xml");
+  model_->vis.headlight.ambient[0] = model_->vis.headlight.ambient[1] =
+      model_->vis.headlight.ambient[2] = static_cast<float>(scenario_.ambient);
+  data_ = mj_makeData(model_);
+
+  for (const auto& [name, q] : home_q) data_->qpos[model_->jnt_qposadr[Id(mjOBJ_JOINT, name)]] = q;
+  for (const auto& [name, u] : home_ctrl) data_->ctrl[Id(mjOBJ_ACTUATOR, name)] = u;
+  for (const ObjectSpec& o : scenario_.objects) {
+    SimObject so;
+    so.spec = o;
+    so.body = Id(mjOBJ_BODY, "obj_" + o.name);
+    so.geom = Id(mjOBJ_GEOM, "obj_" + o.name);
+    objects_.push_back(so);
+  }
+
+  // Speed limits come from the URDF: one robot model for sim, drivers and pipeline.
+  const auto tree = robot::KinematicTree::FromUrdfFile(
+      ResolveDataPath(std::filesystem::path(model_path).replace_extension(".urdf").string()));
+  speed_limit_.assign(model_->nu, 0.0);
+  motion_.assign(model_->nu, Motion{});
+  for (int a = 0; a < model_->nu; ++a) {
+    const int joint = model_->actuator_trnid[2 * a];
+    speed_limit_[a] = tree.Limits(mj_id2name(model_, mjOBJ_JOINT, joint)).velocity;
+  }
+  for (int j = 0; j < model_->njnt; ++j) {
+    if (model_->jnt_type[j] == mjJNT_FREE) continue;
+    robot_dofs_.push_back(model_->jnt_dofadr[j]);
+  }
+  led_on_material_ = Id(mjOBJ_MATERIAL, "led_on");
+  led_off_material_ = Id(mjOBJ_MATERIAL, "led_off");
+
+  mj_forward(model_, data_);
+  Step(options.settle_s);
+}
+
+World::~World() {
+  mj_deleteData(data_);
+  mj_deleteModel(model_);
+}
+
+int World::Id(mjtObj type, const std::string& name) const {
+  const int id = mj_name2id(model_, type, name.c_str());
+  if (id < 0) throw std::runtime_error("model has no " + std::string(mju_type2Str(type)) + " '" + name + "'");
+  return id;
+}
+
+double World::JointPosition(const std::string& joint) const {
+  return data_->qpos[model_->jnt_qposadr[Id(mjOBJ_JOINT, joint)]];
+}
+
+void World::StartMotion(const std::vector<int>& actuators, const std::vector<double>& goal,
+                        const std::vector<double>& speed_limit, bool constant_speed) {
+  HGRASP_DEMAND(actuators.size() == goal.size() && goal.size() == speed_limit.size());
+  double duration = 0.0;
+  for (size_t i = 0; i < actuators.size(); ++i) {
+    const int a = actuators[i];
+    HGRASP_DEMAND(speed_limit[i] > 0);
+    const double distance = std::abs(goal[i] - data_->ctrl[a]);
+    // The cubic profile peaks at 1.5 times the mean speed.
+    duration = std::max(duration, (constant_speed ? 1.0 : 1.5) * distance / speed_limit[i]);
+  }
+  for (size_t i = 0; i < actuators.size(); ++i) {
+    Motion& m = motion_[actuators[i]];
+    m.start = data_->ctrl[actuators[i]];
+    m.goal = goal[i];
+    m.t0 = data_->time;
+    m.duration = duration;
+    m.active = true;
+    m.constant_speed = constant_speed;
+  }
+}
+
+bool World::Moving(const std::vector<int>& actuators) const {
+  return std::any_of(actuators.begin(), actuators.end(),
+                     [&](int a) { return motion_[a].active; });
+}
+
+void World::StopMotion(const std::vector<int>& actuators) {
+  for (int a : actuators) motion_[a].active = false;
+}
+
+void World::ApplyControllers() {
+  const double t = data_->time;
+  for (int a = 0; a < model_->nu; ++a) {
+    Motion& m = motion_[a];
+    if (!m.active) continue;
+    const double s = m.duration > 0 ? std::clamp((t - m.t0) / m.duration, 0.0, 1.0) : 1.0;
+    data_->ctrl[a] = m.start + (m.goal - m.start) * (m.constant_speed ? s : Smoothstep(s));
+    if (s >= 1.0) m.active = false;
+  }
+  // Gravity and Coriolis feed-forward, as the arm and head controllers provide.
+  for (int dof : robot_dofs_) data_->qfrc_applied[dof] = data_->qfrc_bias[dof];
+}
+
+void World::Step(double duration_s) {
+  const int steps = static_cast<int>(std::lround(duration_s / model_->opt.timestep));
+  for (int i = 0; i < steps; ++i) {
+    ApplyControllers();
+    mj_step(model_, data_);
+  }
+}
+
+Pose3 World::SitePose(int site) const {
+  Pose3 X = Pose3::Identity();
+  for (int i = 0; i < 3; ++i) {
+    X.translation()[i] = data_->site_xpos[3 * site + i];
+    for (int j = 0; j < 3; ++j) X.linear()(i, j) = data_->site_xmat[9 * site + 3 * i + j];
+  }
+  return X;
+}
+
+Pose3 World::BodyPose(int body) const {
+  Pose3 X = Pose3::Identity();
+  for (int i = 0; i < 3; ++i) {
+    X.translation()[i] = data_->xpos[3 * body + i];
+    for (int j = 0; j < 3; ++j) X.linear()(i, j) = data_->xmat[9 * body + 3 * i + j];
+  }
+  return X;
+}
+
+bool World::PathClear(const Eigen::Vector3d& from_W, const Eigen::Vector3d& to_W,
+                      double ignore_near_to_m) const {
+  const Eigen::Vector3d v = to_W - from_W;
+  const double length = v.norm();
+  const Eigen::Vector3d unit = v / length;
+  const double kLift = 1e-3;  // leave the surface the path starts on
+  const Eigen::Vector3d start = from_W + kLift * unit;
+  int geom = -1;
+  const double hit = mj_ray(model_, data_, start.data(), unit.data(), nullptr, 1, -1, &geom);
+  return hit < 0 || hit >= length - kLift - ignore_near_to_m;
+}
+
+int World::LedCount(const std::string& side) const {
+  int n = 0;
+  while (mj_name2id(model_, mjOBJ_GEOM, (side + "_led" + std::to_string(n)).c_str()) >= 0) ++n;
+  return n;
+}
+
+void World::SetLed(const std::string& side, int index, bool on) {
+  const int geom = Id(mjOBJ_GEOM, side + "_led" + std::to_string(index));
+  const int material = on ? led_on_material_ : led_off_material_;
+  if (model_->geom_matid[geom] != material) {
+    model_->geom_matid[geom] = material;
+    ++appearance_version_;
+  }
+}
+
+}  // namespace hgrasp::sim

@@ -1,0 +1,59 @@
+// Rendering benchmarks on whatever renders here (Mesa's llvmpipe on the 2-core CI machine):
+// one stereo frame, rendered in full and composited from the per-head-pose cache, and a
+// 300-position laser sweep through the devices (target: at most 2 s wall).
+
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <memory>
+
+#include "sim/sim_devices.h"
+
+namespace hgrasp::sim {
+namespace {
+
+std::unique_ptr<SimRobot> DefaultRobot() {
+  setenv("HGRASP_ROOT", HGRASP_SOURCE_ROOT, 0);
+  return std::make_unique<SimRobot>(LoadScenario(std::string(HGRASP_SOURCE_ROOT) + "/scenarios/default.yaml"));
+}
+
+void BM_StereoFrameFullRender(benchmark::State& state) {
+  auto robot = DefaultRobot();
+  robot->world().set_laser_on(true);
+  robot->rig().set_cache_enabled(false);
+  std::uint64_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(robot->rig().Expose(k++));
+  state.SetLabel(robot->rig().renderer().DeviceDescription());
+}
+BENCHMARK(BM_StereoFrameFullRender)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_StereoFrameComposited(benchmark::State& state) {
+  auto robot = DefaultRobot();
+  robot->world().set_laser_on(true);
+  std::uint64_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(robot->rig().Expose(k++));
+}
+BENCHMARK(BM_StereoFrameComposited)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// A scan: the laser crosses the workspace (-24 to +24 deg) in 300 frames, 40 ms of simulated
+// time each, through the device seam as the scanner will drive it.
+void BM_Sweep300(benchmark::State& state) {
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto robot = DefaultRobot();
+    auto dev = robot->TakeDevices();
+    dev.laser->SetLaser(true);
+    dev.laser->MoveTo(-2400, 90000);
+    device::StereoFrame frame;
+    for (int i = 0; i < 60; ++i) dev.cameras->Grab(&frame);  // reach the start
+    state.ResumeTiming();
+    dev.laser->MoveTo(2400, 4800 / (300 * 0.04));
+    for (int i = 0; i < 300; ++i) dev.cameras->Grab(&frame);
+    benchmark::DoNotOptimize(frame);
+    state.counters["renders"] = robot->rig().full_renders();
+  }
+}
+BENCHMARK(BM_Sweep300)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+}  // namespace
+}  // namespace hgrasp::sim

@@ -1,0 +1,440 @@
+#include "sim/scenario.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/error.h"
+#include "common/geometry.h"
+#include "common/paths.h"
+
+namespace hgrasp::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kFixtures = std::string(HGRASP_TEST_DATA) + "/scenarios/";
+constexpr double kEps = 1e-12;
+
+std::vector<std::string> FilesIn(const std::string& dir, const std::string& prefix) {
+  std::vector<std::string> files;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (e.path().extension() == ".yaml" && name.rfind(prefix, 0) == 0) {
+      files.push_back(e.path().string());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Good files.
+
+TEST(ScenarioTest, EveryGoodFixtureAndShippedScenarioLoads) {
+  std::vector<std::string> files = FilesIn(kFixtures, "good_");
+  const std::vector<std::string> shipped = FilesIn(ProjectRoot() + "/scenarios", "");
+  files.insert(files.end(), shipped.begin(), shipped.end());
+  ASSERT_GE(files.size(), 7u);
+  for (const std::string& f : files) {
+    SCOPED_TRACE(f);
+    EXPECT_NO_THROW({
+      const Scenario s = LoadScenario(f);
+      EXPECT_EQ(s.path, f);
+    });
+  }
+}
+
+TEST(ScenarioTest, MinimalTakesDefaults) {
+  const Scenario s = LoadScenario(kFixtures + "good_minimal.yaml");
+  EXPECT_EQ(s.name, "minimal");
+  EXPECT_EQ(s.seed, 0u);
+  EXPECT_EQ(s.camera_noise, 0.0);
+  EXPECT_EQ(s.ambient, 0.35);
+  EXPECT_FALSE(s.wall_x.has_value());
+  EXPECT_TRUE(s.objects.empty());
+  EXPECT_TRUE(s.interference.empty());
+  EXPECT_FALSE(s.task.has_value());
+  EXPECT_TRUE(s.devices.empty());
+}
+
+TEST(ScenarioTest, FullBlockStyleValues) {
+  const Scenario s = LoadScenario(kFixtures + "good_full.yaml");
+  EXPECT_EQ(s.name, "full");
+  EXPECT_EQ(s.seed, 12345678901234u);
+  EXPECT_EQ(s.camera_noise, 1.5);
+  EXPECT_EQ(s.ambient, 0.5);
+  ASSERT_TRUE(s.wall_x.has_value());
+  EXPECT_EQ(*s.wall_x, 0.8);
+
+  ASSERT_EQ(s.objects.size(), 2u);
+  const ObjectSpec& red = s.objects[0];
+  EXPECT_EQ(red.name, "red_box");
+  EXPECT_EQ(red.shape, "box");
+  EXPECT_TRUE(red.size_O.isApprox(Eigen::Vector3d(0.10, 0.04, 0.20)));
+  EXPECT_TRUE(red.position_W.isApprox(Eigen::Vector2d(0.30, 0.10)));
+  EXPECT_NEAR(red.yaw, kPi / 2, kEps);
+  EXPECT_EQ(red.color_rgb, Eigen::Vector3d(1.0, 0.0, 0.0));
+  EXPECT_EQ(red.mass, 0.5);
+  EXPECT_TRUE(red.specular);
+  // yaw 90 deg: the box's own x axis points along W y; its centre is half its height up.
+  const Pose3 X_WO = red.X_WO();
+  EXPECT_TRUE(X_WO.translation().isApprox(Eigen::Vector3d(0.30, 0.10, 0.10)));
+  EXPECT_TRUE((X_WO.linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY()));
+  EXPECT_TRUE((X_WO.linear() * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitZ()));
+
+  const ObjectSpec& green = s.objects[1];
+  EXPECT_EQ(green.name, "green_box");
+  EXPECT_TRUE(green.size_O.isApprox(Eigen::Vector3d(0.05, 0.05, 0.05)));
+  EXPECT_TRUE(green.position_W.isApprox(Eigen::Vector2d(0.30, -0.10)));
+  EXPECT_EQ(green.yaw, 0.0);     // default
+  EXPECT_EQ(green.mass, 0.2);    // default
+  EXPECT_FALSE(green.specular);  // default
+  EXPECT_NEAR(green.X_WO().translation().z(), 0.025, kEps);
+  EXPECT_TRUE(green.X_WO().linear().isIdentity());
+
+  ASSERT_EQ(s.interference.size(), 1u);
+  EXPECT_TRUE(s.interference[0].origin_W.isApprox(Eigen::Vector3d(0.6, -0.8, 0.5)));
+  EXPECT_NEAR(s.interference[0].sweep_min, -kPi / 9, kEps);
+  EXPECT_NEAR(s.interference[0].sweep_max, kPi / 9, kEps);
+  EXPECT_EQ(s.interference[0].period_s, 2.0);
+
+  ASSERT_TRUE(s.task.has_value());
+  EXPECT_EQ(s.task->target_name, "green_box");
+  EXPECT_EQ(s.task->target_color, "");
+  EXPECT_EQ(s.task->lift_m, 0.08);
+
+  ASSERT_EQ(s.devices.size(), 2u);
+  EXPECT_EQ(s.devices.at("head").driver, "sim");
+  EXPECT_EQ(s.devices.at("head").params.at("latency_s"), "0.01");
+  EXPECT_EQ(s.devices.at("head").params.at("label"), "left head");
+  EXPECT_EQ(s.devices.at("laser").driver, "sim");
+  EXPECT_TRUE(s.devices.at("laser").params.empty());
+}
+
+TEST(ScenarioTest, JsonFlowStyle) {
+  const Scenario s = LoadScenario(kFixtures + "good_flow.yaml");
+  EXPECT_EQ(s.name, "flow");
+  EXPECT_EQ(s.seed, 3u);
+  EXPECT_EQ(s.camera_noise, 0.0);
+  EXPECT_EQ(s.ambient, 0.2);
+  ASSERT_EQ(s.objects.size(), 1u);
+  EXPECT_EQ(s.objects[0].name, "cube");
+  EXPECT_NEAR(s.objects[0].yaw, -kPi / 4, kEps);
+  EXPECT_TRUE(s.objects[0].color_rgb.isApprox(Eigen::Vector3d(0.1, 0.2, 0.3)));
+  EXPECT_FALSE(s.objects[0].specular);
+  EXPECT_NEAR(s.objects[0].X_WO().translation().z(), 0.035, kEps);
+  ASSERT_EQ(s.interference.size(), 1u);
+  EXPECT_EQ(s.interference[0].period_s, 1.0);
+  ASSERT_TRUE(s.task.has_value());
+  EXPECT_EQ(s.task->target_color, "blue");
+  EXPECT_EQ(s.task->target_name, "");
+  EXPECT_EQ(s.task->lift_m, 0.05);  // default
+  EXPECT_TRUE(s.devices.empty());
+}
+
+TEST(ScenarioTest, TouchingAndEdgeOfTableAreValid) {
+  const Scenario s = LoadScenario(kFixtures + "good_edges.yaml");
+  EXPECT_EQ(s.objects.size(), 5u);
+}
+
+TEST(ScenarioTest, DefaultScenarioIsThePapersExperiment) {
+  const Scenario s = LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  EXPECT_EQ(s.name, "default");
+  EXPECT_EQ(s.seed, 7u);
+  EXPECT_EQ(s.camera_noise, 2.0);
+  ASSERT_EQ(s.objects.size(), 2u);
+  EXPECT_EQ(s.objects[0].name, "yellow_box");
+  EXPECT_TRUE(s.objects[0].size_O.isApprox(Eigen::Vector3d(0.06, 0.09, 0.12)));
+  EXPECT_NEAR(s.objects[0].yaw, DegToRad(25), kEps);
+  EXPECT_NEAR(s.objects[1].yaw, DegToRad(-10), kEps);
+  EXPECT_NEAR(s.objects[0].X_WO().translation().z(), 0.06, kEps);
+  // Both centres in the workspace.
+  for (const ObjectSpec& o : s.objects) {
+    EXPECT_GE(o.position_W.x(), 0.20);
+    EXPECT_LE(o.position_W.x(), 0.40);
+    EXPECT_GE(o.position_W.y(), -0.15);
+    EXPECT_LE(o.position_W.y(), 0.15);
+  }
+  ASSERT_TRUE(s.task.has_value());
+  EXPECT_EQ(s.task->target_color, "yellow");
+  EXPECT_EQ(s.task->lift_m, 0.05);
+}
+
+TEST(ScenarioTest, ShippedVariants) {
+  const Scenario interference =
+      LoadScenario(ResolveDataPath("scenarios/two_boxes_interference.yaml"));
+  EXPECT_EQ(interference.interference.size(), 2u);
+  int specular = 0;
+  for (const ObjectSpec& o : interference.objects) specular += o.specular ? 1 : 0;
+  EXPECT_EQ(specular, 1);
+
+  const Scenario wall = LoadScenario(ResolveDataPath("scenarios/plane_wall.yaml"));
+  ASSERT_TRUE(wall.wall_x.has_value());
+  EXPECT_EQ(*wall.wall_x, 0.9);
+  EXPECT_EQ(wall.objects.size(), 1u);
+}
+
+TEST(ScenarioTest, ParseScenarioFromText) {
+  const Scenario s = ParseScenario("{name: t, seed: 42}", "<inline>");
+  EXPECT_EQ(s.path, "<inline>");
+  EXPECT_EQ(s.name, "t");
+  EXPECT_EQ(s.seed, 42u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Interference sweep: a triangle wave min -> max -> min.
+
+TEST(ScenarioInterferenceTest, AngleAtKnownTimes) {
+  InterferenceSpec s;
+  s.sweep_min = -0.2;
+  s.sweep_max = 0.4;
+  s.period_s = 2.0;
+  EXPECT_NEAR(s.AngleAt(0.0), -0.2, kEps);
+  EXPECT_NEAR(s.AngleAt(0.5), 0.1, kEps);   // a quarter period: halfway up
+  EXPECT_NEAR(s.AngleAt(1.0), 0.4, kEps);   // half a period: the top
+  EXPECT_NEAR(s.AngleAt(1.5), 0.1, kEps);   // halfway down
+  EXPECT_NEAR(s.AngleAt(2.0), -0.2, kEps);  // a full period: back to the start
+  EXPECT_NEAR(s.AngleAt(4.5), 0.1, kEps);   // periodic
+  EXPECT_NEAR(s.AngleAt(-0.5), 0.1, kEps);  // and for negative times
+  for (double t = -3.0; t < 3.0; t += 0.01) {
+    EXPECT_GE(s.AngleAt(t), s.sweep_min - kEps);
+    EXPECT_LE(s.AngleAt(t), s.sweep_max + kEps);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad files: one fault each, reported with file:line, field path and the value as written.
+
+struct BadCase {
+  const char* file;   // under tests/data/scenarios/
+  int line;           // 1-based line the error points at; 0: none (the whole file)
+  const char* field;  // InputError::field()
+  const char* value;  // InputError::value(), as written in the file
+};
+
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.file; }
+
+class BadScenarioTest : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadScenarioTest, ThrowsInputErrorNamingFileLineFieldAndValue) {
+  const BadCase& c = GetParam();
+  const std::string path = kFixtures + c.file;
+  try {
+    LoadScenario(path);
+    FAIL() << "no error for " << c.file;
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    SCOPED_TRACE(what);
+    const std::string where = c.line > 0 ? path + ":" + std::to_string(c.line) : path;
+    EXPECT_EQ(e.file(), where);
+    EXPECT_EQ(e.field(), c.field);
+    EXPECT_EQ(e.value(), c.value);
+    EXPECT_NE(what.find(c.file), std::string::npos);
+    EXPECT_NE(what.find(where + ": "), std::string::npos);
+    if (*c.field != '\0') {
+      EXPECT_NE(what.find(std::string(c.field) + ": "), std::string::npos);
+    }
+    if (*c.value != '\0') {
+      EXPECT_NE(what.find("'" + std::string(c.value) + "'"), std::string::npos);
+    }
+    EXPECT_NE(what.find("; expected "), std::string::npos);
+  }
+}
+
+const BadCase kBadCases[] = {
+    {"bad_ambient.yaml", 2, "lighting.ambient", "1.5"},
+    {"bad_color_name.yaml", 3, "task.target.color", "purple"},
+    {"bad_color_range.yaml", 7, "objects[0].color", "[1.2, 0.5, 0.1]"},
+    {"bad_device_key.yaml", 3, "devices.gripper", "gripper"},
+    {"bad_driver.yaml", 3, "devices.head.driver", "biclops"},
+    {"bad_duplicate_key.yaml", 4, "seed", "seed"},
+    {"bad_duplicate_name.yaml", 8, "objects[1].name", "twin"},
+    {"bad_empty.yaml", 0, "top level", ""},
+    {"bad_lift.yaml", 4, "task.lift", "-0.05"},
+    {"bad_missing_name.yaml", 2, "name", ""},
+    {"bad_missing_object_field.yaml", 3, "objects[0].color", ""},
+    {"bad_negative_mass.yaml", 8, "objects[0].mass", "-0.1"},
+    {"bad_negative_noise.yaml", 2, "camera_noise", "-1.5"},
+    {"bad_negative_size.yaml", 10, "objects[1].size", "[0.06, -0.09, 0.12]"},
+    {"bad_not_map.yaml", 2, "top level", "[{name: not_a_map}]"},
+    {"bad_object_name.yaml", 3, "objects[0].name", "my box"},
+    {"bad_objects_not_list.yaml", 2, "objects", "{name: a}"},
+    {"bad_off_table.yaml", 7, "objects[0].position", "[0.86, 0.0]"},
+    {"bad_overlap.yaml", 13, "objects[1].position", "[0.40, 0.0]"},
+    {"bad_period.yaml", 5, "interference[0].period_s", "0"},
+    {"bad_position_count.yaml", 6, "objects[0].position", "[0.30]"},
+    {"bad_quoted_number.yaml", 2, "camera_noise", "2.0"},
+    {"bad_shape.yaml", 4, "objects[0].shape", "cylinder"},
+    {"bad_size_range.yaml", 5, "objects[0].size", "[0.06, 0.09, 0.6]"},
+    {"bad_sweep.yaml", 4, "interference[0].sweep_deg", "[20, -20]"},
+    {"bad_syntax.yaml", 6, "YAML syntax", "position: [0.30, 0.0]"},
+    {"bad_target_both.yaml", 9, "task.target", "{color: yellow, name: a}"},
+    {"bad_target_name.yaml", 9, "task.target.name", "purple_box"},
+    {"bad_target_neither.yaml", 3, "task.target", "{}"},
+    {"bad_two_documents.yaml", 3, "top level", "---"},
+    {"bad_unknown_key.yaml", 2, "camera_nosie", "camera_nosie"},
+    {"bad_unknown_object_key.yaml", 8, "objects[0].texture", "texture"},
+    {"bad_wall.yaml", 3, "wall.x", "0.6"},
+    {"bad_wrong_type.yaml", 2, "seed", "abc"},
+    {"bad_wrong_type_bool.yaml", 8, "objects[0].specular", "maybe"},
+    {"bad_wrong_type_size.yaml", 5, "objects[0].size", "0.05"},
+};
+
+INSTANTIATE_TEST_SUITE_P(Fixtures, BadScenarioTest, ::testing::ValuesIn(kBadCases),
+                         [](const ::testing::TestParamInfo<BadCase>& info) {
+                           std::string name = fs::path(info.param.file).stem().string();
+                           return name;
+                         });
+
+TEST(ScenarioTest, EveryBadFixtureHasACase) {
+  std::set<std::string> covered;
+  for (const BadCase& c : kBadCases) covered.insert(c.file);
+  for (const std::string& f : FilesIn(kFixtures, "bad_")) {
+    EXPECT_EQ(covered.count(fs::path(f).filename().string()), 1u) << f << " has no test case";
+  }
+}
+
+TEST(ScenarioTest, MissingFile) {
+  const std::string path = kFixtures + "no_such_scenario.yaml";
+  try {
+    LoadScenario(path);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.field(), "");
+    EXPECT_EQ(e.value(), path);
+    EXPECT_NE(std::string(e.what()).find("no such file"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScenarioTest, DirectoryIsNotAFile) { EXPECT_THROW(LoadScenario(kFixtures), InputError); }
+
+// Unknown keys are errors at every level; the error names the key's path and line.
+TEST(ScenarioTest, UnknownKeyAtEveryLevel) {
+  const std::string object =
+      "{name: a, shape: box, size: [0.05, 0.05, 0.05], position: [0.3, 0], color: [1, 0, 0]";
+  const std::string interference = "{origin: [1, 0, 0.5], sweep_deg: [-10, 10], period_s: 1";
+  const struct {
+    std::string yaml, field;
+  } cases[] = {
+      {"name: t\nbogus: 1\n", "bogus"},
+      {"name: t\nobjects:\n  - " + object + ", bogus: 1}\n", "objects[0].bogus"},
+      {"name: t\nlighting:\n  bogus: 1\n", "lighting.bogus"},
+      {"name: t\nwall:\n  bogus: 1\n", "wall.bogus"},
+      {"name: t\ninterference:\n  - " + interference + ", bogus: 1}\n", "interference[0].bogus"},
+      {"name: t\ntask:\n  bogus: 1\n", "task.bogus"},
+      {"name: t\ntask:\n  target: {color: red,\n    bogus: 1}\n", "task.target.bogus"},
+      {"name: t\ndevices:\n  bogus: {driver: sim}\n", "devices.bogus"},
+      {"name: t\ndevices:\n  head: {driver: sim,\n    bogus: 1}\n", "devices.head.bogus"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.yaml);
+    try {
+      ParseScenario(c.yaml, "inline.yaml");
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), c.field);
+      EXPECT_EQ(e.value(), "bogus");
+      const int line = static_cast<int>(std::count(c.yaml.begin(), c.yaml.end(), '\n'));
+      EXPECT_EQ(e.file(), "inline.yaml:" + std::to_string(line)) << e.what();
+    }
+  }
+}
+
+// A one-object scenario in flow style; `extra` adds fields, the others may be replaced.
+std::string OneBox(const std::string& size = "[0.05, 0.05, 0.05]",
+                   const std::string& position = "[0.3, 0]", const std::string& color = "[1, 0, 0]",
+                   const std::string& extra = "") {
+  return "name: t\nobjects: [{name: a, shape: box, size: " + size + ", position: " + position +
+         ", color: " + color + extra + "}]\n";
+}
+
+// Further faults, inline: each must throw InputError naming the field.
+TEST(ScenarioTest, MoreBadValues) {
+  const struct {
+    std::string yaml, field;
+  } cases[] = {
+      {"seed: 1\n", "name"},
+      {"name: ''\n", "name"},
+      {"name: [a, b]\n", "name"},
+      {"name: t\nseed: -1\n", "seed"},
+      {"name: t\nseed: 1.5\n", "seed"},
+      {"name: t\nseed: 99999999999999999999999\n", "seed"},
+      {"name: t\nseed:\n", "seed"},
+      {"name: t\ncamera_noise: .nan\n", "camera_noise"},
+      {"name: t\ncamera_noise: .inf\n", "camera_noise"},
+      {"name: t\ncamera_noise: 0x10\n", "camera_noise"},
+      {"name: t\nlighting: 0.3\n", "lighting"},
+      {"name: t\nlighting: {ambient: -0.1}\n", "lighting.ambient"},
+      {"name: t\nwall: {x: 0.4}\n", "wall.x"},
+      {"name: t\nwall: {}\n", "wall.x"},
+      {"name: t\nwall: 0.9\n", "wall"},
+      {OneBox("[0, 0.05, 0.05]"), "objects[0].size"},
+      {OneBox("[0.005, 0.05, 0.05]"), "objects[0].size"},
+      {OneBox("[0.05, 0.05]"), "objects[0].size"},
+      {OneBox("[0.05, a, 0.05]"), "objects[0].size"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[-0.1, 0, 0]"), "objects[0].color"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[1, 0]"), "objects[0].color"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[1, 0, 0]", ", mass: 0"), "objects[0].mass"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[1, 0, 0]", ", yaw_deg: ninety"),
+       "objects[0].yaw_deg"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.05, 0]"), "objects[0].position"},     // behind x 0.08
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0.59]"), "objects[0].position"},   // past y 0.60
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, -0.59]"), "objects[0].position"},  // past y -0.60
+      {"name: t\nobjects: [{name: a, size: [0.05, 0.05, 0.05], position: [0.3, 0], "
+       "color: [1, 0, 0]}]\n",
+       "objects[0].shape"},
+      {"name: t\nobjects: [{shape: box, size: [0.05, 0.05, 0.05], position: [0.3, 0], "
+       "color: [1, 0, 0]}]\n",
+       "objects[0].name"},
+      {"name: t\nobjects: [5]\n", "objects[0]"},
+      {"name: t\ninterference: [{origin: [1, 0], sweep_deg: [-1, 1], period_s: 1}]\n",
+       "interference[0].origin"},
+      {"name: t\ninterference: [{origin: [1, 0, 0], sweep_deg: [1, 1], period_s: 1}]\n",
+       "interference[0].sweep_deg"},
+      {"name: t\ninterference: [{origin: [1, 0, 0], sweep_deg: [-1, 1], period_s: -2}]\n",
+       "interference[0].period_s"},
+      {"name: t\ninterference: [{origin: [1, 0, 0], sweep_deg: [-1, 1]}]\n",
+       "interference[0].period_s"},
+      {"name: t\ninterference: {origin: [1, 0, 0]}\n", "interference"},
+      {"name: t\ntask: {lift: 0.05}\n", "task.target"},
+      {"name: t\ntask: {target: yellow}\n", "task.target"},
+      {"name: t\ntask: {target: {color: yellow}, lift: 0.5}\n", "task.lift"},
+      {"name: t\ntask: {target: {name: ghost}}\n", "task.target.name"},
+      {"name: t\ntask: 1\n", "task"},
+      {"name: t\ndevices: {head: {}}\n", "devices.head.driver"},
+      {"name: t\ndevices: {head: sim}\n", "devices.head"},
+      {"name: t\ndevices: {head: {driver: sim, params: {a: [1, 2]}}}\n", "devices.head.params.a"},
+      {"name: t\ndevices: {head: {driver: sim, params: 3}}\n", "devices.head.params"},
+      {"name: t\ndevices: []\n", "devices"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.yaml);
+    try {
+      ParseScenario(c.yaml, "inline.yaml");
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), c.field) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("inline.yaml", 0), 0u) << e.what();
+    }
+  }
+}
+
+TEST(ScenarioTest, SyntaxErrorInFlowStyleNamesTheLine) {
+  try {
+    ParseScenario("{\"name\": \"x\",\n \"seed\": 3,\n \"objects\": [}\n", "flow.yaml");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "YAML syntax");
+    EXPECT_EQ(e.file().rfind("flow.yaml:", 0), 0u) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace hgrasp::sim

@@ -1,0 +1,182 @@
+// The simulated devices behave as the seam promises: lockstep time, latched readings, motions
+// within the speed limits, tool-frame moves, the hand, the LEDs and the laser encoder.
+
+#include "sim/sim_devices.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/sim/sim_test_util.h"
+
+namespace hgrasp::sim {
+namespace {
+
+using device::Side;
+using device::Status;
+
+class SimDevicesTest : public ::testing::Test {
+ protected:
+  SimDevicesTest() : robot_(testing::ScenarioFromYaml(testing::kEmptyScene)), dev_(robot_.TakeDevices()) {}
+  // Grabs frames until `done` or `max_frames`; returns the frames grabbed.
+  template <typename F>
+  int GrabUntil(F done, int max_frames) {
+    device::StereoFrame f;
+    for (int i = 0; i < max_frames; ++i) {
+      if (done()) return i;
+      dev_.cameras->Grab(&f);
+    }
+    return max_frames;
+  }
+  SimRobot robot_;
+  device::RobotDevices dev_;
+};
+
+TEST_F(SimDevicesTest, GrabAdvancesTimeByOneFrameAndLatchesReadings) {
+  device::StereoFrame a, b;
+  ASSERT_EQ(dev_.cameras->Grab(&a), Status::kOk);
+  ASSERT_EQ(dev_.cameras->Grab(&b), Status::kOk);
+  EXPECT_NEAR(b.t_s - a.t_s, 0.040, 1e-9);
+  EXPECT_EQ(b.sequence, a.sequence + 1);
+  EXPECT_EQ(a.left.rows, 240);
+  EXPECT_EQ(a.left.cols, 320);
+  EXPECT_EQ(a.left.type(), CV_8UC3);
+  device::HeadState head;
+  dev_.head->Read(&head);
+  EXPECT_NEAR(b.head.tilt, head.q.tilt, 1e-12);
+  EXPECT_NEAR(b.head.verge, head.q.verge, 1e-12);
+}
+
+TEST_F(SimDevicesTest, HeadMovesToTargetWithinItsSpeedLimit) {
+  device::HeadState s0, s;
+  dev_.head->Read(&s0);
+  const device::HeadJoints target{0.3, s0.q.tilt - 0.1, s0.q.verge + 0.02};
+  ASSERT_EQ(dev_.head->MoveTo(target), Status::kOk);
+  const int frames = GrabUntil([&] { dev_.head->Read(&s); return !s.moving && s.t_s > s0.t_s; }, 200);
+  GrabUntil([] { return false; }, 10);  // settle
+  dev_.head->Read(&s);
+  EXPECT_NEAR(s.q.pan, 0.3, 2e-3);
+  EXPECT_NEAR(s.q.tilt, target.tilt, 2e-3);
+  EXPECT_NEAR(s.q.verge, target.verge, 2e-3);
+  // 0.3 rad of pan at 150 deg/s takes at least 0.115 s.
+  EXPECT_GE(frames * 0.04, 0.3 / DegToRad(150));
+  EXPECT_EQ(dev_.head->MoveTo({0, DegToRad(75), 0}), Status::kRejected);  // tilt limit 60 deg
+}
+
+TEST_F(SimDevicesTest, ArmJointMoveArrivesTogetherWithinSpeedLimits) {
+  device::ArmState s0, s;
+  dev_.ArmOf(Side::kRight).Read(&s0);
+  device::Joint6 goal = s0.q;
+  goal[0] += 0.4;
+  goal[3] += 0.6;
+  ASSERT_EQ(dev_.ArmOf(Side::kRight).MoveJoints(goal), Status::kOk);
+  const double limits_deg[6] = {120, 120, 165, 575, 430, 400};
+  double worst_ratio = 0;
+  device::StereoFrame f;
+  for (int i = 0; i < 100; ++i) {
+    dev_.cameras->Grab(&f);
+    dev_.ArmOf(Side::kRight).Read(&s);
+    for (int j = 0; j < 6; ++j) worst_ratio = std::max(worst_ratio, std::abs(s.qd[j]) / DegToRad(limits_deg[j]));
+  }
+  EXPECT_LT((s.q - goal).cwiseAbs().maxCoeff(), 2e-3);
+  EXPECT_LT(worst_ratio, 1.05);
+  device::Joint6 bad = goal;
+  bad[4] = DegToRad(150);  // beyond joint 5's range
+  EXPECT_EQ(dev_.ArmOf(Side::kRight).MoveJoints(bad), Status::kRejected);
+}
+
+TEST_F(SimDevicesTest, RelativeMoveInGripperFrameMovesTheGripperByThatMuch) {
+  World& w = robot_.world();
+  const int gripper = w.Id(mjOBJ_BODY, "left_gripper");
+  const Pose3 before = w.BodyPose(gripper);
+  Pose3 delta = Pose3::Identity();
+  delta.translation() = Eigen::Vector3d(0.02, -0.01, 0.03);
+  delta.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d(0, 0, 1)).toRotationMatrix();
+  ASSERT_EQ(dev_.ArmOf(Side::kLeft).MoveRelative(delta), Status::kOk);
+  GrabUntil([] { return false; }, 60);
+  const Pose3 after = w.BodyPose(gripper);
+  const Pose3 expected = before * delta;
+  EXPECT_LT((after.translation() - expected.translation()).norm(), 1e-3);
+  EXPECT_LT(Eigen::AngleAxisd(after.linear().transpose() * expected.linear()).angle(), DegToRad(0.5));
+  Pose3 far = Pose3::Identity();
+  far.translation() = Eigen::Vector3d(0, 0, 2.0);  // 2 m: out of reach
+  EXPECT_EQ(dev_.ArmOf(Side::kLeft).MoveRelative(far), Status::kRejected);
+}
+
+TEST_F(SimDevicesTest, HandOpensAndClosesWithLimitedForce) {
+  device::Hand& hand = dev_.HandOf(Side::kRight);
+  device::HandState s;
+  ASSERT_EQ(hand.Open(0.09), Status::kOk);
+  GrabUntil([] { return false; }, 30);
+  hand.Read(&s);
+  EXPECT_NEAR(s.opening_m, 0.09, 1e-3);
+  ASSERT_EQ(hand.Close(30.0), Status::kOk);
+  GrabUntil([] { return false; }, 40);
+  hand.Read(&s);
+  EXPECT_LT(s.opening_m, 1e-3);
+  EXPECT_LE(s.grip_force_n, 30.0 + 1e-6);
+  EXPECT_EQ(hand.Close(-1.0), Status::kRejected);
+}
+
+TEST_F(SimDevicesTest, LedsSwitchTheirMaterial) {
+  World& w = robot_.world();
+  EXPECT_GE(dev_.leds->Count(Side::kLeft), 4);
+  const int led = w.Id(mjOBJ_GEOM, "left_led2");
+  const int on = w.Id(mjOBJ_MATERIAL, "led_on"), off = w.Id(mjOBJ_MATERIAL, "led_off");
+  ASSERT_EQ(dev_.leds->Set(Side::kLeft, 0b100), Status::kOk);
+  EXPECT_EQ(w.model()->geom_matid[led], on);
+  EXPECT_EQ(w.model()->geom_matid[w.Id(mjOBJ_GEOM, "left_led0")], off);
+  ASSERT_EQ(dev_.leds->Set(Side::kLeft, 0), Status::kOk);
+  EXPECT_EQ(w.model()->geom_matid[led], off);
+  EXPECT_EQ(dev_.leds->Set(Side::kLeft, 1u << 20), Status::kRejected);
+}
+
+TEST_F(SimDevicesTest, LaserEncoderFollowsAConstantSpeedSweep) {
+  ASSERT_EQ(dev_.laser->MoveTo(1500, 2500.0), Status::kOk);  // 25 deg/s
+  device::StereoFrame f;
+  std::vector<int> counts;
+  for (int i = 0; i < 20; ++i) {
+    dev_.cameras->Grab(&f);
+    counts.push_back(f.laser_encoder_count);
+  }
+  // Mid-sweep, successive frames are 40 ms * 2500 counts/s = 100 counts apart (within lag).
+  EXPECT_NEAR(counts[10] - counts[9], 100, 3);
+  GrabUntil([] { return false; }, 20);
+  device::StripeLaserState s;
+  dev_.laser->Read(&s);
+  EXPECT_NEAR(s.encoder_count, 1500, 2);
+  EXPECT_EQ(dev_.laser->MoveTo(100000, 1000), Status::kRejected);
+}
+
+TEST(SimRobotTest, AtHomeTheCamerasSeeNoPartOfTheRobot) {
+  SimRobot robot(testing::ScenarioFromYaml(testing::kEmptyScene));
+  World& w = robot.world();
+  const int table = w.Id(mjOBJ_GEOM, "table");
+  for (int cam : {kLeft, kRight}) {
+    const cv::Mat& label = robot.rig().View(cam).images.label;
+    int robot_pixels = 0;
+    for (int r = 0; r < label.rows; ++r)
+      for (int c = 0; c < label.cols; ++c) robot_pixels += label.at<int>(r, c) >= 0 && label.at<int>(r, c) != table;
+    EXPECT_EQ(robot_pixels, 0) << "camera " << cam;
+  }
+}
+
+TEST(SimRobotTest, WorkspaceIsSeenByBothCamerasFromTheHomePose) {
+  // DESIGN.md: a box of 4-15 cm edges anywhere in x [0.20, 0.40], y [-0.15, 0.15], at any yaw.
+  // Its farthest points lie up to 0.15/sqrt(2) from the workspace edge and 0.15 high.
+  SimRobot robot(testing::ScenarioFromYaml(testing::kEmptyScene));
+  const double reach = 0.15 / std::sqrt(2.0);
+  for (int cam : {kLeft, kRight}) {
+    const CameraView& view = robot.rig().View(cam);
+    for (double x : {0.20 - reach, 0.40 + reach})
+      for (double y : {-0.15 - reach, 0.15 + reach})
+        for (double z : {0.0, 0.15}) {
+          const auto uv = view.camera.Project(view.X_WC.inverse() * Eigen::Vector3d(x, y, z));
+          ASSERT_TRUE(uv.has_value());
+          EXPECT_TRUE(view.camera.Contains(*uv)) << "camera " << cam << " misses " << x << " " << y << " " << z;
+        }
+  }
+}
+
+}  // namespace
+}  // namespace hgrasp::sim

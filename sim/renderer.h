@@ -1,0 +1,61 @@
+#pragma once
+/// @file Off-screen rendering of MuJoCo cameras: colour, metric depth and per-pixel labels.
+
+#include <mujoco/mujoco.h>
+
+#include <memory>
+#include <opencv2/core/mat.hpp>
+#include <string>
+
+#include "common/geometry.h"
+#include "common/pinhole_camera.h"
+
+namespace hgrasp::sim {
+
+class EglContext;
+
+/// What one camera sees of the ambient-lit scene (no laser light, no noise).
+struct CameraImages {
+  cv::Mat color;  ///< (H x W) CV_8UC3, BGR
+  cv::Mat depth;  ///< (H x W) CV_32F, z of the surface along the optical axis (m); 0: nothing
+  cv::Mat label;  ///< (H x W) CV_32S, MuJoCo geom id of the surface; -1: nothing
+};
+
+/// Renders the cameras of one model through a process-wide EGL context (GPU device when there
+/// is one, Mesa's software renderer otherwise). Not thread-safe; one per model.
+class Renderer {
+ public:
+  /// @param model  the model whose cameras are rendered; must outlive the renderer and allow
+  ///               an off-screen buffer of at least width x height (visual/global/offwidth).
+  Renderer(const mjModel* model, int width, int height);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Renders camera `camera_id` of the model in state `data` (kinematics must be current).
+  CameraImages Render(const mjData* data, int camera_id);
+
+  /// Intrinsics of camera `camera_id` for this renderer's image size (from cam_fovy).
+  PinholeCamera Intrinsics(int camera_id) const;
+
+  /// Pose X_WC of the camera's optical frame C (x right, y down, z forward) in state `data`.
+  static Pose3 OpticalFramePose(const mjData* data, int camera_id);
+
+  /// What renders: "EGL device 0 (...)" or "Mesa surfaceless (llvmpipe ...)".
+  std::string DeviceDescription() const;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  const mjModel* model_;
+  int width_, height_;
+  std::shared_ptr<EglContext> egl_;
+  mjvScene scene_;
+  mjvOption option_;
+  mjrContext context_;
+  std::vector<unsigned char> rgb_;
+  std::vector<float> depth_;
+};
+
+}  // namespace hgrasp::sim

@@ -1,0 +1,111 @@
+#pragma once
+/// @file Scenario files (DESIGN.md, "Scenario files (YAML)"): the objects on the table, the
+/// lighting, an optional wall, other robots' laser stripes, the task and the device backends.
+/// A scenario is ground truth: only sim/, src/app/ and tests read it, never the pipeline.
+///
+/// Every value is checked when the file is loaded; a bad one throws hgrasp::InputError naming
+/// "FILE:LINE", the field path (e.g. "objects[1].size"), the value as written and what was
+/// expected (DESIGN.md rule 5). Unknown keys are errors at every level.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/geometry.h"
+
+namespace hgrasp::sim {
+
+/// Table top extent in W (m). The table top is the plane z = 0. Must match the table geom in
+/// models/humanoid.xml; every object's footprint must lie inside it.
+constexpr double kTableMinX = 0.08, kTableMaxX = 0.90, kTableMinY = -0.60, kTableMaxY = 0.60;
+
+/// Accepted range of each object edge length (m).
+constexpr double kMinObjectEdge = 0.01, kMaxObjectEdge = 0.5;
+
+/// A wall, when present, must stand beyond this x (m) as well as beyond every object.
+constexpr double kMinWallX = 0.5;
+
+/// Largest accepted task lift (m): the Puma 260 reaches about 0.4 m from its shoulder.
+constexpr double kMaxLift = 0.3;
+
+/// Colour names accepted in task.target.color.
+inline constexpr std::array<std::string_view, 10> kColorNames = {
+    "red", "orange", "yellow", "green", "cyan", "blue", "magenta", "white", "grey", "black"};
+
+/// Device keys accepted under `devices:`.
+inline constexpr std::array<std::string_view, 8> kDeviceKeys = {
+    "arm_left", "arm_right", "hand_left", "hand_right", "head", "laser", "leds", "cameras"};
+
+/// One object resting on the table.
+struct ObjectSpec {
+  std::string name;                                      ///< unique within the scenario
+  std::string shape = "box";                             ///< only "box" for now
+  Eigen::Vector3d size_O = Eigen::Vector3d::Zero();      ///< full edge lengths along O x, y, z (m)
+  Eigen::Vector2d position_W = Eigen::Vector2d::Zero();  ///< x, y of the box centre in W (m)
+  double yaw = 0.0;                                      ///< rad about W z (YAML field yaw_deg)
+  Eigen::Vector3d color_rgb = Eigen::Vector3d::Zero();   ///< RGB, each 0-1
+  double mass = 0.2;                                     ///< kg, > 0
+  bool specular = false;  ///< true: the surface mirrors the laser (spurious reflections)
+
+  /// Pose of the box centre in W: translation (x, y, size_O.z / 2), rotation RotZ(yaw).
+  Pose3 X_WO() const;
+};
+
+/// Another robot's laser stripe (cross-talk): a vertical light plane from origin_W whose angle
+/// about the source's vertical axis sweeps back and forth.
+struct InterferenceSpec {
+  Eigen::Vector3d origin_W = Eigen::Vector3d::Zero();  ///< source position in W (m)
+  double sweep_min = 0.0;  ///< rad (YAML sweep_deg: [min, max]); sweep_min < sweep_max
+  double sweep_max = 0.0;  ///< rad
+  double period_s = 1.0;   ///< s, > 0: one full sweep min -> max -> min
+
+  /// Plane angle (rad) about the source's vertical axis at time t_s (s): a triangle wave going
+  /// sweep_min -> sweep_max -> sweep_min over one period, at sweep_min when t_s = 0. Periodic for
+  /// negative times too.
+  double AngleAt(double t_s) const;
+};
+
+/// What to grasp. Exactly one of target_color and target_name is non-empty.
+struct TaskSpec {
+  std::string target_color;  ///< one of kColorNames, or empty
+  std::string target_name;   ///< the name of one of the scenario's objects, or empty
+  double lift_m = 0.05;      ///< m, > 0 and <= kMaxLift
+};
+
+/// Backend of one device (DESIGN.md rule 2). Only driver "sim" is valid for now. params are kept
+/// as written (scalar values); checking them is the driver's job.
+struct DeviceSpec {
+  std::string driver = "sim";
+  std::map<std::string, std::string> params;
+};
+
+/// A parsed and checked scenario file.
+struct Scenario {
+  std::string path;              ///< the file it came from (as given to LoadScenario)
+  std::string name;              ///< required
+  std::uint64_t seed = 0;        ///< every random draw in sim derives from it (DESIGN.md rule 6)
+  double camera_noise = 0.0;     ///< std. dev. of Gaussian pixel noise, grey levels 0-255, >= 0
+  double ambient = 0.35;         ///< lighting.ambient, 0-1
+  std::optional<double> wall_x;  ///< wall: {x: ...}: the plane x = wall_x (m), facing the robot
+  std::vector<ObjectSpec> objects;
+  std::vector<InterferenceSpec> interference;
+  std::optional<TaskSpec> task;
+  /// Keys among kDeviceKeys; a device not listed is simulated.
+  std::map<std::string, DeviceSpec> devices;
+};
+
+/// Reads and checks the scenario file at `path` (used as given; resolve it first with
+/// hgrasp::ResolveDataPath where needed). Throws hgrasp::InputError when the file is missing or
+/// unreadable, is not valid YAML, or holds a bad value.
+Scenario LoadScenario(const std::string& path);
+
+/// Parses and checks scenario YAML text; `path_for_errors` names it in error messages and becomes
+/// Scenario::path. Throws hgrasp::InputError.
+Scenario ParseScenario(const std::string& yaml_text, const std::string& path_for_errors);
+
+}  // namespace hgrasp::sim

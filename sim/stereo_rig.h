@@ -1,0 +1,73 @@
+#pragma once
+/// @file The simulated stereo head's image formation: ambient-lit scene rendered once per head
+/// pose, laser stripes composited per frame, camera noise from the scenario seed.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "sim/renderer.h"
+#include "sim/stripe.h"
+#include "sim/world.h"
+
+namespace hgrasp::sim {
+
+enum CameraIndex { kLeft = 0, kRight = 1 };
+
+/// Both images of one exposure and the stripe crossings drawn in each.
+struct StereoImages {
+  std::array<cv::Mat, 2> image;  ///< (240 x 320) CV_8UC3 BGR, with stripes and noise
+  std::array<std::vector<StripeCrossing>, 2> crossings;
+};
+
+class StereoRig {
+ public:
+  static constexpr int kWidth = 320, kHeight = 240;
+  /// Fraction of a specular surface's light reflected as a mirror (the rest is diffuse).
+  static constexpr double kSpecularReflectance = 0.6;
+
+  explicit StereoRig(World* world, StripeOptics optics = {});
+
+  /// The camera's view at the current state, rendered anew only when the scene changed (any
+  /// joint but the laser's moved by more than 1 um or 1 urad since the last render, or an LED
+  /// switched); with the cache off, rendered every call.
+  const CameraView& View(int camera);
+
+  /// The light sheets at the current state and time: our laser (when on), the scenario's
+  /// interference stripes, and their mirror images in specular objects.
+  std::vector<LightSheet> Sheets() const;
+
+  /// Our laser's light plane in W at laser angle `laser_rad` with the head where it is now.
+  Plane LaserPlaneAt(double laser_rad) const;
+  /// The laser generator's origin (on its rotation axis) in W, now.
+  Eigen::Vector3d LaserSource() const;
+
+  /// Composes one exposure: ambient + stripes + Gaussian noise (scenario camera_noise) drawn
+  /// from the scenario seed and `frame_key`, saturated to 0-255.
+  StereoImages Expose(std::uint64_t frame_key);
+
+  void set_cache_enabled(bool on) { cache_enabled_ = on; }
+  /// Full scene renders so far (each one renders both colour/depth and labels).
+  int full_renders() const { return full_renders_; }
+  const StripeOptics& optics() const { return optics_; }
+  Renderer& renderer() { return *renderer_; }
+  int camera_id(int camera) const { return camera_ids_[camera]; }
+
+ private:
+  std::vector<double> SceneKey() const;
+  std::vector<double> RedReflectance() const;
+
+  World* world_;
+  StripeOptics optics_;
+  std::unique_ptr<Renderer> renderer_;
+  std::array<int, 2> camera_ids_;
+  int laser_site_, laser_joint_, laser_joint_qpos_;
+  std::array<CameraView, 2> views_;
+  std::array<bool, 2> valid_ = {false, false};
+  std::vector<double> key_;
+  bool cache_enabled_ = true;
+  int full_renders_ = 0;
+};
+
+}  // namespace hgrasp::sim
