@@ -37,7 +37,8 @@ build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
 run: build
-	./$(BUILD)/hgrasp render $(SCENARIO) --out $(OUT)
+	./$(BUILD)/hgrasp render $(SCENARIO) --out $(OUT) --encoder 530 -800
+	@echo "make run: images in $(OUT)/ (stereo_pair.png: left and right with the stripe)"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)

@@ -21,14 +21,13 @@ bool WithinRange(const mjModel* m, int joint, double q) {
 
 class SimArm final : public device::Arm {
  public:
-  SimArm(World* world, Side side) : world_(world) {
+  SimArm(World* world, Side side) : world_(world), side_(side) {
     const std::string s = SideName(side);
     for (int i = 0; i < 6; ++i) {
       const std::string name = s + "_j" + std::to_string(i + 1);
       joint_[i] = world->Id(mjOBJ_JOINT, name);
       actuator_.push_back(world->Id(mjOBJ_ACTUATOR, name));
     }
-    gripper_ = world->Id(mjOBJ_BODY, s + "_gripper");
   }
 
   Status Read(device::ArmState* state) override {
@@ -54,50 +53,13 @@ class SimArm final : public device::Arm {
   }
 
   Status MoveRelative(const Pose3& X_EEnew) override {
-    // The controller's own inverse kinematics: damped least squares on the arm's Jacobian,
-    // from the set-point it holds now.
-    const mjModel* m = world_->model();
-    mjData* scratch = mj_makeData(m);
-    mju_copy(scratch->qpos, world_->data()->qpos, m->nq);
-    for (int i = 0; i < 6; ++i) scratch->qpos[m->jnt_qposadr[joint_[i]]] = world_->data()->ctrl[actuator_[i]];
-    mj_kinematics(m, scratch);
-    const Pose3 X_WE = BodyPose(m, scratch);
-    const Pose3 X_WT = X_WE * X_EEnew;
-    std::vector<mjtNum> jacp(3 * m->nv), jacr(3 * m->nv);
-    bool converged = false;
-    for (int iter = 0; iter < 200 && !converged; ++iter) {
-      mj_kinematics(m, scratch);
-      mj_comPos(m, scratch);
-      const Pose3 X = BodyPose(m, scratch);
-      Eigen::Matrix<double, 6, 1> e;
-      e.head<3>() = X_WT.translation() - X.translation();
-      const Eigen::AngleAxisd aa(X_WT.linear() * X.linear().transpose());
-      e.tail<3>() = aa.angle() * aa.axis();
-      if (e.head<3>().norm() < 1e-7 && e.tail<3>().norm() < 1e-6) {
-        converged = true;
-        break;
-      }
-      mj_jacBody(m, scratch, jacp.data(), jacr.data(), gripper_);
-      Eigen::Matrix<double, 6, 6> J;
-      for (int i = 0; i < 6; ++i) {
-        const int dof = m->jnt_dofadr[joint_[i]];
-        for (int r = 0; r < 3; ++r) {
-          J(r, i) = jacp[r * m->nv + dof];
-          J(r + 3, i) = jacr[r * m->nv + dof];
-        }
-      }
-      const double lambda2 = 1e-6;
-      const Eigen::Matrix<double, 6, 1> dq =
-          J.transpose() * (J * J.transpose() + lambda2 * Eigen::Matrix<double, 6, 6>::Identity())
-                              .ldlt()
-                              .solve(e);
-      for (int i = 0; i < 6; ++i) scratch->qpos[m->jnt_qposadr[joint_[i]]] += dq[i];
-    }
-    Joint6 q;
-    for (int i = 0; i < 6; ++i) q[i] = scratch->qpos[m->jnt_qposadr[joint_[i]]];
-    mj_deleteData(scratch);
-    if (!converged) return Status::kRejected;
-    return MoveJoints(q);
+    // The controller's own inverse kinematics, from the set-point it holds now.
+    Joint6 q_now;
+    for (int i = 0; i < 6; ++i) q_now[i] = world_->data()->ctrl[actuator_[i]];
+    const Pose3 X_WE = ArmForwardKinematics(*world_, side_, q_now);
+    const auto q = ArmInverseKinematics(*world_, side_, X_WE * X_EEnew, q_now);
+    if (!q) return Status::kRejected;
+    return MoveJoints(*q);
   }
 
   Status SetSpeed(double fraction) override {
@@ -112,19 +74,10 @@ class SimArm final : public device::Arm {
   }
 
  private:
-  Pose3 BodyPose(const mjModel*, const mjData* d) const {
-    Pose3 X = Pose3::Identity();
-    for (int i = 0; i < 3; ++i) {
-      X.translation()[i] = d->xpos[3 * gripper_ + i];
-      for (int j = 0; j < 3; ++j) X.linear()(i, j) = d->xmat[9 * gripper_ + 3 * i + j];
-    }
-    return X;
-  }
-
   World* world_;
+  Side side_;
   int joint_[6];
   std::vector<int> actuator_;
-  int gripper_;
   double speed_ = 1.0;
 };
 
@@ -284,6 +237,94 @@ class SimStereoCamera final : public device::StereoCamera {
 };
 
 }  // namespace
+
+namespace {
+
+// The arm's joint ids and gripper body, and a scratch state at the world's current state.
+struct ArmChain {
+  int joint[6];
+  int gripper;
+};
+
+ArmChain Chain(const World& world, Side side) {
+  ArmChain c;
+  const std::string s = SideName(side);
+  for (int i = 0; i < 6; ++i) c.joint[i] = world.Id(mjOBJ_JOINT, s + "_j" + std::to_string(i + 1));
+  c.gripper = world.Id(mjOBJ_BODY, s + "_gripper");
+  return c;
+}
+
+Pose3 GripperPose(const mjData* d, int body) {
+  Pose3 X = Pose3::Identity();
+  for (int i = 0; i < 3; ++i) {
+    X.translation()[i] = d->xpos[3 * body + i];
+    for (int j = 0; j < 3; ++j) X.linear()(i, j) = d->xmat[9 * body + 3 * i + j];
+  }
+  return X;
+}
+
+}  // namespace
+
+Pose3 ArmForwardKinematics(const World& world, Side side, const Joint6& q) {
+  const mjModel* m = world.model();
+  const ArmChain chain = Chain(world, side);
+  mjData* scratch = mj_makeData(m);
+  mju_copy(scratch->qpos, world.data()->qpos, m->nq);
+  for (int i = 0; i < 6; ++i) scratch->qpos[m->jnt_qposadr[chain.joint[i]]] = q[i];
+  mj_kinematics(m, scratch);
+  const Pose3 X = GripperPose(scratch, chain.gripper);
+  mj_deleteData(scratch);
+  return X;
+}
+
+std::optional<Joint6> ArmInverseKinematics(const World& world, Side side, const Pose3& X_WE,
+                                           const Joint6& q_start) {
+  // Damped least squares on the gripper's Jacobian (MuJoCo's), as a Puma controller solves
+  // its tool moves: local, from the configuration it holds.
+  const mjModel* m = world.model();
+  const ArmChain chain = Chain(world, side);
+  mjData* scratch = mj_makeData(m);
+  mju_copy(scratch->qpos, world.data()->qpos, m->nq);
+  for (int i = 0; i < 6; ++i) scratch->qpos[m->jnt_qposadr[chain.joint[i]]] = q_start[i];
+  std::vector<mjtNum> jacp(3 * m->nv), jacr(3 * m->nv);
+  bool converged = false;
+  for (int iter = 0; iter < 300 && !converged; ++iter) {
+    mj_kinematics(m, scratch);
+    mj_comPos(m, scratch);
+    const Pose3 X = GripperPose(scratch, chain.gripper);
+    Eigen::Matrix<double, 6, 1> e;
+    e.head<3>() = X_WE.translation() - X.translation();
+    const Eigen::AngleAxisd aa(X_WE.linear() * X.linear().transpose());
+    e.tail<3>() = aa.angle() * aa.axis();
+    if (e.head<3>().norm() < 1e-7 && e.tail<3>().norm() < 1e-6) {
+      converged = true;
+      break;
+    }
+    mj_jacBody(m, scratch, jacp.data(), jacr.data(), chain.gripper);
+    Eigen::Matrix<double, 6, 6> J;
+    for (int i = 0; i < 6; ++i) {
+      const int dof = m->jnt_dofadr[chain.joint[i]];
+      for (int r = 0; r < 3; ++r) {
+        J(r, i) = jacp[r * m->nv + dof];
+        J(r + 3, i) = jacr[r * m->nv + dof];
+      }
+    }
+    // Damping grows with the error: long steps stay stable, the last ones are Gauss-Newton.
+    const double lambda2 = 1e-6 + 1e-3 * e.squaredNorm();
+    const Eigen::Matrix<double, 6, 1> dq =
+        J.transpose() *
+        (J * J.transpose() + lambda2 * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(e);
+    for (int i = 0; i < 6; ++i) scratch->qpos[m->jnt_qposadr[chain.joint[i]]] += dq[i];
+  }
+  Joint6 q;
+  for (int i = 0; i < 6; ++i) q[i] = scratch->qpos[m->jnt_qposadr[chain.joint[i]]];
+  mj_deleteData(scratch);
+  if (!converged) return std::nullopt;
+  for (int i = 0; i < 6; ++i) {
+    if (!WithinRange(m, chain.joint[i], q[i])) return std::nullopt;
+  }
+  return q;
+}
 
 device::RobotDevices MakeSimDevices(World* world, StereoRig* rig) {
   device::RobotDevices d;

@@ -4,6 +4,7 @@
 /// simulated time by one frame period (40 ms) and renders the exposure.
 
 #include <memory>
+#include <optional>
 
 #include "device/robot_devices.h"
 #include "sim/stereo_rig.h"
@@ -29,5 +30,16 @@ class SimRobot {
 
 /// The individual devices (exposed for tests).
 device::RobotDevices MakeSimDevices(World* world, StereoRig* rig);
+
+/// Pose X_WE of arm `side`'s gripper frame with the arm at joint angles `q` (the rest of the
+/// robot as it is now), from the simulator's model: what the simulated Puma controller knows.
+Pose3 ArmForwardKinematics(const World& world, device::Side side, const device::Joint6& q);
+
+/// Joint angles that put arm `side`'s gripper frame at X_WE, found by damped least squares from
+/// `q_start` (a local solution, as the Puma controller's tool moves are); nullopt when it does
+/// not converge to 0.1 um / 1 urad or leaves the joint ranges.
+std::optional<device::Joint6> ArmInverseKinematics(const World& world, device::Side side,
+                                                   const Pose3& X_WE,
+                                                   const device::Joint6& q_start);
 
 }  // namespace hgrasp::sim

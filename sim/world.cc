@@ -99,6 +99,21 @@ void InsertBefore(std::string* xml, const std::string& tag, const std::string& t
 // Smooth 0..1 position profile with zero speed at both ends; peak slope 1.5.
 double Smoothstep(double s) { return s * s * (3.0 - 2.0 * s); }
 
+// Time a constant-speed move (the laser motor) takes to reach full speed and to stop.
+constexpr double kRampS = 0.04;
+
+// 0..1 position of a constant-speed move of `duration` s at time t: speed ramps up linearly
+// over kRampS, cruises, ramps down over kRampS (a DC motor's finite acceleration).
+double Trapezoid(double t, double duration) {
+  if (duration <= 2 * kRampS) return Smoothstep(std::clamp(t / duration, 0.0, 1.0));
+  const double v = 1.0 / (duration - kRampS);  // cruise speed, so that the ramps fit
+  if (t <= 0) return 0.0;
+  if (t < kRampS) return 0.5 * v * t * t / kRampS;
+  if (t < duration - kRampS) return v * (t - 0.5 * kRampS);
+  if (t < duration) return 1.0 - 0.5 * v * (duration - t) * (duration - t) / kRampS;
+  return 1.0;
+}
+
 }  // namespace
 
 World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::move(scenario)) {
@@ -194,6 +209,7 @@ void World::StartMotion(const std::vector<int>& actuators, const std::vector<dou
     // The cubic profile peaks at 1.5 times the mean speed.
     duration = std::max(duration, (constant_speed ? 1.0 : 1.5) * distance / speed_limit[i]);
   }
+  if (constant_speed && duration > 0) duration += kRampS;  // cruise at speed_limit
   for (size_t i = 0; i < actuators.size(); ++i) {
     Motion& m = motion_[actuators[i]];
     m.start = data_->ctrl[actuators[i]];
@@ -220,7 +236,8 @@ void World::ApplyControllers() {
     Motion& m = motion_[a];
     if (!m.active) continue;
     const double s = m.duration > 0 ? std::clamp((t - m.t0) / m.duration, 0.0, 1.0) : 1.0;
-    data_->ctrl[a] = m.start + (m.goal - m.start) * (m.constant_speed ? s : Smoothstep(s));
+    const double profile = m.constant_speed ? Trapezoid(t - m.t0, m.duration) : Smoothstep(s);
+    data_->ctrl[a] = m.start + (m.goal - m.start) * profile;
     if (s >= 1.0) m.active = false;
   }
   // Gravity and Coriolis feed-forward, as the arm and head controllers provide.

@@ -60,7 +60,8 @@ class World {
 
   /// Starts a synchronised move of `actuators` to `goal` (joint units): every joint arrives
   /// together. Smooth moves follow a cubic profile whose peak speed stays within `speed_limit`
-  /// of every joint; constant-speed moves (the laser motor) run at `speed_limit` throughout.
+  /// of every joint; constant-speed moves (the laser motor) ramp up over 40 ms, run at
+  /// `speed_limit`, and ramp down over 40 ms.
   void StartMotion(const std::vector<int>& actuators, const std::vector<double>& goal,
                    const std::vector<double>& speed_limit, bool constant_speed);
   /// True while any of `actuators` has a motion under way.

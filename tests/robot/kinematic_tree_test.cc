@@ -350,7 +350,7 @@ TEST_F(HumanoidTest, PumaChainMatchesStandardDh) {
 TEST_F(HumanoidTest, ArmBasesAreOnTheShoulders) {
   for (const auto& [side, s] : {std::pair<std::string, double>{"left", 1.0}, {"right", -1.0}}) {
     const Pose3 X_WB = tree_->LinkPose(side + "_base", {});
-    EXPECT_NEAR((X_WB.translation() - Vector3d(0, s * 0.22, 0.33)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((X_WB.translation() - Vector3d(0.07, s * 0.28, 0.30)).norm(), 0.0, 1e-12);
     EXPECT_TRUE(X_WB.linear().isIdentity(1e-12));
   }
 }

@@ -295,7 +295,7 @@ TEST_F(ModelAgreementTest, HomeAimsBothCamerasAtTheWorkspace) {
   }
 }
 
-TEST_F(ModelAgreementTest, HomeKeepsTheArmsOutOfViewAndOffTheTable) {
+TEST_F(ModelAgreementTest, HomeKeepsTheArmsOffTheTable) {
   ResetToHome();
   EXPECT_EQ(data_->ncon, 0) << "something touches at home";
   const int left_base = mj_name2id(model_, mjOBJ_BODY, "left_base");
@@ -335,9 +335,8 @@ TEST_F(ModelAgreementTest, HomeKeepsTheArmsOutOfViewAndOffTheTable) {
       const std::string where = std::string(mj_id2name(model_, mjOBJ_BODY, body)) + " geom " +
                                 std::to_string(g) + " at " + Fmt(p.x()) + " " + Fmt(p.y()) + " " +
                                 Fmt(p.z());
+      // Out of view is checked by rendering (SimRobotTest.AtHomeTheCamerasSeeNoPartOfTheRobot).
       EXPECT_GT(p.z() - r, 0.01) << where;
-      EXPECT_LT(p.z() + r, 0.45) << where;
-      EXPECT_TRUE(p.x() + r < 0.10 || std::abs(p.y()) - r > 0.30) << where;
     }
     ++checked;
   }
@@ -458,8 +457,14 @@ TEST(ModelGripTest, HandHoldsABoxAgainstGravity) {
   ASSERT_EQ(robot->nu, m->nu);
   std::copy_n(robot->key_qpos + home * robot->nq, robot->nq, d->qpos);
   std::copy_n(robot->key_ctrl + home * robot->nu, robot->nu, d->ctrl);
-  qpos("left_j6") = 0.0;
-  d->ctrl[id(mjOBJ_ACTUATOR, "left_j6")] = 0.0;
+  // The left arm in a pose of its own (not the keyframe's): upper arm down, forearm out to the
+  // side, hand forward, turned so that the fingers close horizontally.
+  const double arm_deg[6] = {90, -90, 0, -90, 0, 0};
+  for (int i = 0; i < 6; ++i) {
+    const std::string joint = "left_j" + std::to_string(i + 1);
+    qpos(joint.c_str()) = arm_deg[i] * M_PI / 180.0;
+    d->ctrl[id(mjOBJ_ACTUATOR, joint.c_str())] = arm_deg[i] * M_PI / 180.0;
+  }
   qpos("left_thumb_slide") = qpos("left_index_slide") = 0.0305;
   mj_kinematics(m.get(), d.get());
   const int grip = id(mjOBJ_BODY, "left_gripper");

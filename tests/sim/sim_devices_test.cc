@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "tests/sim/sim_test_util.h"
 
@@ -176,6 +177,62 @@ TEST(SimRobotTest, WorkspaceIsSeenByBothCamerasFromTheHomePose) {
           EXPECT_TRUE(view.camera.Contains(*uv)) << "camera " << cam << " misses " << x << " " << y << " " << z;
         }
   }
+}
+
+}  // namespace
+}  // namespace hgrasp::sim
+
+namespace hgrasp::sim {
+namespace {
+
+// The gripper pose that grasps at `centre_W` (the midpoint between the finger pads, 0.12 m out
+// along E's z) with the fingers closing along horizontal direction `yaw`, the approach pointing
+// down and tilted by `tilt` about the closing axis (the paper's R2: palm above the top face).
+Pose3 GraspPose(const Eigen::Vector3d& centre_W, double yaw, double tilt) {
+  const Eigen::Vector3d x = RotZ(yaw) * Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d z = Eigen::AngleAxisd(tilt, x) * Eigen::Vector3d(0, 0, -1);
+  Pose3 X_WE = Pose3::Identity();
+  X_WE.linear().col(0) = x;
+  X_WE.linear().col(1) = z.cross(x);
+  X_WE.linear().col(2) = z;
+  X_WE.translation() = centre_W - 0.12 * z;
+  return X_WE;
+}
+
+TEST(SimRobotTest, WorkspaceIsReachableByAnArm) {
+  // DESIGN.md: a box anywhere in x [0.20, 0.40], y [-0.15, 0.15], at any yaw, can be grasped by
+  // at least one arm. Grasp centres 1 cm below the top of 4 and 15 cm boxes, four closing
+  // directions, the approach tilted up to 60 deg about the closing axis.
+  World world(testing::ScenarioFromYaml(testing::kEmptyScene));
+  std::mt19937 rng(5);
+  int targets = 0, reached = 0;
+  for (double x : {0.20, 0.25, 0.30, 0.35, 0.40})
+    for (double y : {-0.15, -0.075, 0.0, 0.075, 0.15})
+      for (double z : {0.03, 0.14})
+        for (double yaw_deg : {0, 45, 90, 135}) {
+          ++targets;
+          bool ok = false;
+          for (double tilt_deg : {0, 15, -15, 30, -30, 45, -45, 60, -60}) {
+            const Pose3 X_WE = GraspPose({x, y, z}, DegToRad(yaw_deg), DegToRad(tilt_deg));
+            for (device::Side side : {device::Side::kLeft, device::Side::kRight}) {
+              // The controller solves locally: try a few starting configurations.
+              for (int start = 0; start < 6 && !ok; ++start) {
+                device::Joint6 q0;
+                for (int i = 0; i < 6; ++i) {
+                  const int j = world.Id(mjOBJ_JOINT, std::string(device::ToString(side)) + "_j" + std::to_string(i + 1));
+                  std::uniform_real_distribution<double> u(world.model()->jnt_range[2 * j], world.model()->jnt_range[2 * j + 1]);
+                  q0[i] = start == 0 ? 0.0 : u(rng);
+                }
+                ok = ArmInverseKinematics(world, side, X_WE, q0).has_value();
+              }
+              if (ok) break;
+            }
+            if (ok) break;
+          }
+          reached += ok;
+          EXPECT_TRUE(ok) << "no arm reaches (" << x << ", " << y << ", " << z << ") yaw " << yaw_deg;
+        }
+  std::printf("reach: %d of %d grasp targets reachable by an arm\n", reached, targets);
 }
 
 }  // namespace
