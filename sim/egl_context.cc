@@ -71,10 +71,10 @@ EglContext::EglContext() {
     if (!eglInitialize(display, &major, &minor)) Fail("eglInitialize(surfaceless)");
     description_ = "Mesa surfaceless";
   }
-  const EGLint config_attribs[] = {EGL_RED_SIZE,        8, EGL_GREEN_SIZE, 8,
-                                   EGL_BLUE_SIZE,       8, EGL_ALPHA_SIZE, 8,
-                                   EGL_DEPTH_SIZE,      24,
-                                   EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+  const EGLint config_attribs[] = {EGL_RED_SIZE,   8,  EGL_GREEN_SIZE,      8,
+                                   EGL_BLUE_SIZE,  8,  EGL_ALPHA_SIZE,      8,
+                                   EGL_DEPTH_SIZE, 24, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
+                                   EGL_NONE};
   EGLConfig config = nullptr;
   EGLint num_configs = 0;
   if (!eglChooseConfig(display, config_attribs, &config, 1, &num_configs)) {
@@ -82,9 +82,8 @@ EglContext::EglContext() {
   }
   if (!eglBindAPI(EGL_OPENGL_API)) Fail("eglBindAPI(EGL_OPENGL_API)");
   // MuJoCo 2.2 draws with the fixed-function pipeline: the default (compatibility) profile.
-  EGLContext context =
-      eglCreateContext(display, num_configs > 0 ? config : EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT,
-                       nullptr);
+  EGLContext context = eglCreateContext(display, num_configs > 0 ? config : EGL_NO_CONFIG_KHR,
+                                        EGL_NO_CONTEXT, nullptr);
   if (context == EGL_NO_CONTEXT) Fail("eglCreateContext");
   display_ = display;
   context_ = context;

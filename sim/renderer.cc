@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "sim/egl_context.h"
+#include "sim/world.h"
 
 namespace hgrasp::sim {
 namespace {
@@ -85,8 +86,8 @@ CameraImages Renderer::Render(const mjData* data, int camera_id) {
       color_row[c] = cv::Vec3b(p[2], p[1], p[0]);
       const double d = depth_[src + c];
       // Inverse of OpenGL's perspective depth mapping; d = 1 is the far plane: no surface.
-      depth_row[c] = d >= 1.0 ? 0.0f
-                              : static_cast<float>(znear * zfar / (zfar - d * (zfar - znear)));
+      depth_row[c] =
+          d >= 1.0 ? 0.0f : static_cast<float>(znear * zfar / (zfar - d * (zfar - znear)));
     }
   }
 
@@ -119,14 +120,8 @@ PinholeCamera Renderer::Intrinsics(int camera_id) const {
 
 Pose3 Renderer::OpticalFramePose(const mjData* data, int camera_id) {
   // MuJoCo cameras look along their -z with y up; the optical frame flips y and z.
-  Eigen::Matrix3d R_WM;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) R_WM(i, j) = data->cam_xmat[9 * camera_id + 3 * i + j];
-  Pose3 X_WC = Pose3::Identity();
-  X_WC.linear() = R_WM * Eigen::Vector3d(1, -1, -1).asDiagonal();
-  X_WC.translation() = Eigen::Vector3d(data->cam_xpos[3 * camera_id],
-                                       data->cam_xpos[3 * camera_id + 1],
-                                       data->cam_xpos[3 * camera_id + 2]);
+  Pose3 X_WC = PoseFromMujoco(data->cam_xpos + 3 * camera_id, data->cam_xmat + 9 * camera_id);
+  X_WC.linear() = X_WC.linear() * Eigen::Vector3d(1, -1, -1).asDiagonal();
   return X_WC;
 }
 

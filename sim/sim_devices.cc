@@ -101,7 +101,8 @@ class SimHand final : public device::Hand {
   Status Open(double opening_m) override {
     const mjModel* m = world_->model();
     SetForceLimit(kMaxForceN);
-    const double q = std::clamp(0.5 * opening_m, m->jnt_range[2 * joint_], m->jnt_range[2 * joint_ + 1]);
+    const double q =
+        std::clamp(0.5 * opening_m, m->jnt_range[2 * joint_], m->jnt_range[2 * joint_ + 1]);
     world_->StartMotion({actuator_}, {q}, {world_->SpeedLimit(actuator_)}, false);
     return Status::kOk;
   }
@@ -165,7 +166,9 @@ class SimHead final : public device::Head {
 class SimStripeLaser final : public device::StripeLaser {
  public:
   explicit SimStripeLaser(World* world)
-      : world_(world), joint_(world->Id(mjOBJ_JOINT, "laser")), actuator_(world->Id(mjOBJ_ACTUATOR, "laser")) {}
+      : world_(world),
+        joint_(world->Id(mjOBJ_JOINT, "laser")),
+        actuator_(world->Id(mjOBJ_ACTUATOR, "laser")) {}
 
   Status Read(device::StripeLaserState* state) override {
     state->t_s = world_->time();
@@ -182,15 +185,18 @@ class SimStripeLaser final : public device::StripeLaser {
 
   Status MoveTo(std::int32_t count, double speed_counts_s) override {
     const double goal = count * kLaserRadPerCount;
-    if (!(speed_counts_s > 0) || !WithinRange(world_->model(), joint_, goal)) return Status::kRejected;
-    const double speed = std::min(speed_counts_s * kLaserRadPerCount, world_->SpeedLimit(actuator_));
+    if (!(speed_counts_s > 0) || !WithinRange(world_->model(), joint_, goal))
+      return Status::kRejected;
+    const double speed =
+        std::min(speed_counts_s * kLaserRadPerCount, world_->SpeedLimit(actuator_));
     world_->StartMotion({actuator_}, {goal}, {speed}, true);
     return Status::kOk;
   }
 
   /// The encoder: the motor angle in whole counts.
   static std::int32_t Count(const World* world) {
-    return static_cast<std::int32_t>(std::lround(world->JointPosition("laser") / kLaserRadPerCount));
+    return static_cast<std::int32_t>(
+        std::lround(world->JointPosition("laser") / kLaserRadPerCount));
   }
 
  private:
@@ -255,12 +261,7 @@ ArmChain Chain(const World& world, Side side) {
 }
 
 Pose3 GripperPose(const mjData* d, int body) {
-  Pose3 X = Pose3::Identity();
-  for (int i = 0; i < 3; ++i) {
-    X.translation()[i] = d->xpos[3 * body + i];
-    for (int j = 0; j < 3; ++j) X.linear()(i, j) = d->xmat[9 * body + 3 * i + j];
-  }
-  return X;
+  return PoseFromMujoco(d->xpos + 3 * body, d->xmat + 9 * body);
 }
 
 }  // namespace

@@ -85,9 +85,9 @@ const CameraView& StereoRig::View(int camera) {
   }
   if (!valid_[camera]) {
     const int id = camera_ids_[camera];
-    views_[camera] = CameraView::Make(renderer_->Intrinsics(id),
-                                      Renderer::OpticalFramePose(world_->data(), id),
-                                      renderer_->Render(world_->data(), id), RedReflectance());
+    views_[camera] =
+        CameraView::Make(renderer_->Intrinsics(id), Renderer::OpticalFramePose(world_->data(), id),
+                         renderer_->Render(world_->data(), id), RedReflectance());
     valid_[camera] = true;
     ++full_renders_;
   }
@@ -102,7 +102,8 @@ Plane StereoRig::LaserPlaneAt(double laser_rad) const {
   // Turn the current laser site pose about the laser joint's axis by the angle difference.
   const int joint = laser_joint_;
   const double now = world_->data()->qpos[laser_joint_qpos_];
-  const Eigen::Vector3d axis_W(world_->data()->xaxis[3 * joint], world_->data()->xaxis[3 * joint + 1],
+  const Eigen::Vector3d axis_W(world_->data()->xaxis[3 * joint],
+                               world_->data()->xaxis[3 * joint + 1],
                                world_->data()->xaxis[3 * joint + 2]);
   const Eigen::Vector3d anchor_W(world_->data()->xanchor[3 * joint],
                                  world_->data()->xanchor[3 * joint + 1],
@@ -137,7 +138,8 @@ std::vector<LightSheet> StereoRig::Sheets() const {
         if (f.plane.SignedDistance(source) <= 0) continue;  // the face looks away
         int above = 0;
         for (int su : {-1, 1})
-          for (int sv : {-1, 1}) above += own.plane_W.SignedDistance(f.centre + su * f.u + sv * f.v) > 0;
+          for (int sv : {-1, 1})
+            above += own.plane_W.SignedDistance(f.centre + su * f.u + sv * f.v) > 0;
         if (above == 0 || above == 4) continue;  // the sheet misses this face
         LightSheet mirror;
         mirror.plane_W = f.plane.Reflect(own.plane_W);

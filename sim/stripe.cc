@@ -118,7 +118,8 @@ std::vector<StripeCrossing> AddStripes(const CameraView& view,
         const cv::Vec3d& nv = view.normals_W.at<cv::Vec3d>(r, nearest);
         const Eigen::Vector3d to_source = sheet.source_W - p_W;
         const double range = to_source.norm();
-        const double cos_incidence = std::abs(Eigen::Vector3d(nv[0], nv[1], nv[2]).dot(to_source)) / range;
+        const double cos_incidence =
+            std::abs(Eigen::Vector3d(nv[0], nv[1], nv[2]).dot(to_source)) / range;
         // Width: the sheet's thickness as it lies across the surface, seen from the camera.
         auto plane_distance = [&](int k) {
           const cv::Vec3d& q = view.points_W.at<cv::Vec3d>(r, k);
@@ -140,9 +141,10 @@ std::vector<StripeCrossing> AddStripes(const CameraView& view,
         auto* out = radiance->ptr<cv::Vec3f>(r);
         const int reach = static_cast<int>(std::ceil(4.0 * sigma)) + 1;
         auto draw = [&](int k) {
-          const double v = peak * norm * sigma *
-                           (Phi((k + 0.5 - u) / sigma) - Phi((k - 0.5 - u) / sigma));
-          for (int ch = 0; ch < 3; ++ch) out[k][ch] += static_cast<float>(v * optics.channel_response[ch]);
+          const double v =
+              peak * norm * sigma * (Phi((k + 0.5 - u) / sigma) - Phi((k - 0.5 - u) / sigma));
+          for (int ch = 0; ch < 3; ++ch)
+            out[k][ch] += static_cast<float>(v * optics.channel_response[ch]);
         };
         draw(nearest);
         for (int k = nearest + 1; k < w && k <= nearest + reach; ++k) {

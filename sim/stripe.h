@@ -25,7 +25,7 @@ namespace hgrasp::sim {
 struct StripeOptics {
   double sheet_sigma_m = 0.0008;  ///< Gaussian half-thickness of the light sheet (m)
   double psf_sigma_px = 0.6;      ///< lens blur (pixels)
-  double gain = 300.0;  ///< grey levels for a white surface 0.6 m away facing the laser
+  double gain = 300.0;            ///< grey levels for a white surface 0.6 m away facing the laser
   double reference_range_m = 0.6;
   /// Camera response to the red laser light per channel (B, G, R): mostly red, some crosstalk.
   Eigen::Vector3d channel_response{0.06, 0.12, 1.0};
@@ -37,9 +37,9 @@ struct StripeOptics {
 
 /// A sheet of laser light: our own stripe, another robot's, or a mirror image of one.
 struct LightSheet {
-  Plane plane_W;               ///< the sheet's centre plane
-  Eigen::Vector3d source_W;    ///< where the light comes from (the generator, or its mirror)
-  double gain_scale = 1.0;     ///< relative power (1 for our laser)
+  Plane plane_W;             ///< the sheet's centre plane
+  Eigen::Vector3d source_W;  ///< where the light comes from (the generator, or its mirror)
+  double gain_scale = 1.0;   ///< relative power (1 for our laser)
   /// Whether the sheet's light reaches surface point p_W (shadow test, mirror aperture); it
   /// must return false for points the light cannot reach.
   std::function<bool(const Eigen::Vector3d& p_W)> reaches;
@@ -49,9 +49,9 @@ struct LightSheet {
 struct CameraView {
   PinholeCamera camera;
   Pose3 X_WC;
-  CameraImages images;         ///< ambient colour, depth (m), labels (geom ids)
-  cv::Mat points_W;            ///< (H x W) CV_64FC3: surface point of each pixel in W (m)
-  cv::Mat normals_W;           ///< (H x W) CV_64FC3: unit surface normal (towards the camera)
+  CameraImages images;  ///< ambient colour, depth (m), labels (geom ids)
+  cv::Mat points_W;     ///< (H x W) CV_64FC3: surface point of each pixel in W (m)
+  cv::Mat normals_W;    ///< (H x W) CV_64FC3: unit surface normal (towards the camera)
   /// Red reflectance (0-1) per geom id: the surface colour that the laser light follows.
   std::vector<double> red_reflectance;
 
@@ -62,12 +62,12 @@ struct CameraView {
 
 /// The exact centre of each stripe crossing found on a row (for tests and ground truth).
 struct StripeCrossing {
-  int sheet = 0;                ///< index of the light sheet in the list given to AddStripes
+  int sheet = 0;  ///< index of the light sheet in the list given to AddStripes
   int row = 0;
-  double column = 0.0;         ///< sub-pixel column of the stripe centre
-  Eigen::Vector3d p_W;         ///< the lit surface point
-  double peak = 0.0;           ///< brightness of the centre before saturation (grey levels)
-  double sigma_px = 0.0;       ///< profile width (pixels)
+  double column = 0.0;    ///< sub-pixel column of the stripe centre
+  Eigen::Vector3d p_W;    ///< the lit surface point
+  double peak = 0.0;      ///< brightness of the centre before saturation (grey levels)
+  double sigma_px = 0.0;  ///< profile width (pixels)
 };
 
 /// Adds the light of `sheets` to `radiance` ((H x W) CV_32FC3, B G R grey levels, unclamped)

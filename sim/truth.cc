@@ -17,12 +17,13 @@ nlohmann::json TruthJson(const World& world, const StereoRig& rig,
   for (const SimObject& o : world.objects()) {
     const Pose3 X_WO = world.BodyPose(o.body);
     nlohmann::json j = PoseJson(X_WO);
-    objects.push_back({{"name", o.spec.name},
-                       {"center_W", j["p"]},
-                       {"R_WO", j["R"]},
-                       {"size", {o.spec.size_O.x(), o.spec.size_O.y(), o.spec.size_O.z()}},
-                       {"color_rgb", {o.spec.color_rgb.x(), o.spec.color_rgb.y(), o.spec.color_rgb.z()}},
-                       {"specular", o.spec.specular}});
+    objects.push_back(
+        {{"name", o.spec.name},
+         {"center_W", j["p"]},
+         {"R_WO", j["R"]},
+         {"size", {o.spec.size_O.x(), o.spec.size_O.y(), o.spec.size_O.z()}},
+         {"color_rgb", {o.spec.color_rgb.x(), o.spec.color_rgb.y(), o.spec.color_rgb.z()}},
+         {"specular", o.spec.specular}});
   }
   t["objects"] = objects;
   t["head"] = {{"pan", world.JointPosition("head_pan")},
@@ -36,7 +37,12 @@ nlohmann::json TruthJson(const World& world, const StereoRig& rig,
     cams[c == kLeft ? "left" : "right"] = {
         {"X_WC", PoseJson(Renderer::OpticalFramePose(world.data(), id))},
         {"intrinsics",
-         {{"width", k.width}, {"height", k.height}, {"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}}};
+         {{"width", k.width},
+          {"height", k.height},
+          {"fx", k.fx},
+          {"fy", k.fy},
+          {"cx", k.cx},
+          {"cy", k.cy}}}};
   }
   t["cameras"] = cams;
   nlohmann::json planes = nlohmann::json::array();
@@ -45,11 +51,12 @@ nlohmann::json TruthJson(const World& world, const StereoRig& rig,
     planes.push_back({{"count", count}, {"n_W", {p.n.x(), p.n.y(), p.n.z()}}, {"d", p.d}});
   }
   const Eigen::Vector3d s = rig.LaserSource();
-  t["laser"] = {{"counts_per_rev", kLaserCountsPerRev},
-                {"encoder_count_now", static_cast<std::int32_t>(std::lround(
-                                          world.JointPosition("laser") / kLaserRadPerCount))},
-                {"source_W", {s.x(), s.y(), s.z()}},
-                {"planes", planes}};
+  t["laser"] = {
+      {"counts_per_rev", kLaserCountsPerRev},
+      {"encoder_count_now",
+       static_cast<std::int32_t>(std::lround(world.JointPosition("laser") / kLaserRadPerCount))},
+      {"source_W", {s.x(), s.y(), s.z()}},
+      {"planes", planes}};
   return t;
 }
 

@@ -56,15 +56,16 @@ std::string ObjectsXml(const Scenario& sc) {
     x << "<body name=\"" << name << "\" pos=\"" << Num(o.position_W.x()) << " "
       << Num(o.position_W.y()) << " " << Num(h.z() + 1e-4) << "\" quat=\""
       << Num(std::cos(0.5 * o.yaw)) << " 0 0 " << Num(std::sin(0.5 * o.yaw)) << "\">"
-      << "<freejoint name=\"" << name << "\"/>"
+      << "<freejoint name=\"" << name
+      << "\"/>"
       // Explicit inertia of a uniform box: the model may not infer inertia from geoms.
       << "<inertial pos=\"0 0 0\" mass=\"" << Num(o.mass) << "\" diaginertia=\""
       << Num(o.mass / 3.0 * (h.y() * h.y() + h.z() * h.z())) << " "
       << Num(o.mass / 3.0 * (h.x() * h.x() + h.z() * h.z())) << " "
       << Num(o.mass / 3.0 * (h.x() * h.x() + h.y() * h.y())) << "\"/>"
-      << "<geom name=\"" << name << "\" type=\"box\" size=\"" << Num(h.x()) << " "
-      << Num(h.y()) << " " << Num(h.z()) << "\" rgba=\""
-      << Num(o.color_rgb.x()) << " " << Num(o.color_rgb.y()) << " " << Num(o.color_rgb.z())
+      << "<geom name=\"" << name << "\" type=\"box\" size=\"" << Num(h.x()) << " " << Num(h.y())
+      << " " << Num(h.z()) << "\" rgba=\"" << Num(o.color_rgb.x()) << " " << Num(o.color_rgb.y())
+      << " " << Num(o.color_rgb.z())
       << " 1\" contype=\"1\" conaffinity=\"1\" friction=\"1 0.005 0.0001\""
       << (o.specular ? " material=\"specular_" + o.name + "\"" : std::string()) << "/>"
       << "</body>\n";
@@ -137,7 +138,8 @@ World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::mo
       home_q[mj_id2name(robot, mjOBJ_JOINT, j)] = robot_data->qpos[robot->jnt_qposadr[j]];
     }
   }
-  for (int a = 0; a < robot->nu; ++a) home_ctrl[mj_id2name(robot, mjOBJ_ACTUATOR, a)] = robot_data->ctrl[a];
+  for (int a = 0; a < robot->nu; ++a)
+    home_ctrl[mj_id2name(robot, mjOBJ_ACTUATOR, a)] = robot_data->ctrl[a];
   mj_deleteData(robot_data);
   mj_deleteModel(robot);
 
@@ -190,7 +192,8 @@ World::~World() {
 
 int World::Id(mjtObj type, const std::string& name) const {
   const int id = mj_name2id(model_, type, name.c_str());
-  if (id < 0) throw std::runtime_error("model has no " + std::string(mju_type2Str(type)) + " '" + name + "'");
+  if (id < 0)
+    throw std::runtime_error("model has no " + std::string(mju_type2Str(type)) + " '" + name + "'");
   return id;
 }
 
@@ -222,8 +225,7 @@ void World::StartMotion(const std::vector<int>& actuators, const std::vector<dou
 }
 
 bool World::Moving(const std::vector<int>& actuators) const {
-  return std::any_of(actuators.begin(), actuators.end(),
-                     [&](int a) { return motion_[a].active; });
+  return std::any_of(actuators.begin(), actuators.end(), [&](int a) { return motion_[a].active; });
 }
 
 void World::StopMotion(const std::vector<int>& actuators) {
@@ -252,22 +254,19 @@ void World::Step(double duration_s) {
   }
 }
 
-Pose3 World::SitePose(int site) const {
+Pose3 PoseFromMujoco(const mjtNum* pos, const mjtNum* mat) {
   Pose3 X = Pose3::Identity();
-  for (int i = 0; i < 3; ++i) {
-    X.translation()[i] = data_->site_xpos[3 * site + i];
-    for (int j = 0; j < 3; ++j) X.linear()(i, j) = data_->site_xmat[9 * site + 3 * i + j];
-  }
+  X.translation() = Eigen::Vector3d(pos[0], pos[1], pos[2]);
+  X.linear() = Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>>(mat);
   return X;
 }
 
+Pose3 World::SitePose(int site) const {
+  return PoseFromMujoco(data_->site_xpos + 3 * site, data_->site_xmat + 9 * site);
+}
+
 Pose3 World::BodyPose(int body) const {
-  Pose3 X = Pose3::Identity();
-  for (int i = 0; i < 3; ++i) {
-    X.translation()[i] = data_->xpos[3 * body + i];
-    for (int j = 0; j < 3; ++j) X.linear()(i, j) = data_->xmat[9 * body + 3 * i + j];
-  }
-  return X;
+  return PoseFromMujoco(data_->xpos + 3 * body, data_->xmat + 9 * body);
 }
 
 bool World::PathClear(const Eigen::Vector3d& from_W, const Eigen::Vector3d& to_W,

@@ -22,6 +22,10 @@ constexpr double kLaserRadPerCount = 2.0 * kPi / kLaserCountsPerRev;
 /// Stereo frame period (PAL, 25 frames/s).
 constexpr double kFramePeriodS = 0.04;
 
+/// The pose of a MuJoCo frame from its position (3) and row-major rotation matrix (9), as in
+/// mjData's xpos/xmat, site_xpos/site_xmat, cam_xpos/cam_xmat.
+Pose3 PoseFromMujoco(const mjtNum* pos, const mjtNum* mat);
+
 /// A scenario object in the MuJoCo model.
 struct SimObject {
   ObjectSpec spec;
@@ -108,9 +112,9 @@ class World {
   mjModel* model_ = nullptr;
   mjData* data_ = nullptr;
   std::vector<SimObject> objects_;
-  std::vector<Motion> motion_;        // per actuator
-  std::vector<double> speed_limit_;   // per actuator
-  std::vector<int> robot_dofs_;       // dofs that get gravity compensation
+  std::vector<Motion> motion_;       // per actuator
+  std::vector<double> speed_limit_;  // per actuator
+  std::vector<int> robot_dofs_;      // dofs that get gravity compensation
   bool laser_on_ = false;
   int led_on_material_ = -1, led_off_material_ = -1;
   std::uint64_t appearance_version_ = 0;

@@ -37,7 +37,8 @@ cv::Mat DepthView(const cv::Mat& depth_m) {
   double lo = 1e9, hi = 0;
   for (int r = 0; r < depth_m.rows; ++r)
     for (int c = 0; c < depth_m.cols; ++c)
-      if (const float z = depth_m.at<float>(r, c); z > 0) lo = std::min(lo, double(z)), hi = std::max(hi, double(z));
+      if (const float z = depth_m.at<float>(r, c); z > 0)
+        lo = std::min(lo, double(z)), hi = std::max(hi, double(z));
   cv::Mat grey(depth_m.size(), CV_8U, cv::Scalar(0));
   for (int r = 0; r < depth_m.rows; ++r)
     for (int c = 0; c < depth_m.cols; ++c)
@@ -62,7 +63,8 @@ cv::Mat LabelView(const cv::Mat& label) {
     for (int c = 0; c < label.cols; ++c)
       if (const int g = label.at<int>(r, c); g >= 0) {
         const unsigned h = static_cast<unsigned>(g + 1) * 2654435761u;
-        out.at<cv::Vec3b>(r, c) = cv::Vec3b(64 + (h & 127), 64 + ((h >> 8) & 127), 64 + ((h >> 16) & 127));
+        out.at<cv::Vec3b>(r, c) =
+            cv::Vec3b(64 + (h & 127), 64 + ((h >> 8) & 127), 64 + ((h >> 16) & 127));
       }
   return out;
 }
@@ -141,7 +143,8 @@ int Render(const RenderOptions& o) {
   }
   std::ofstream(fs::path(o.out_dir) / "truth.json") << truth.dump(2) << "\n";
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  spdlog::info("render: {} images and truth.json in {} ({:.2f} s)", outputs.size(), o.out_dir, wall);
+  spdlog::info("render: {} images and truth.json in {} ({:.2f} s)", outputs.size(), o.out_dir,
+               wall);
   return 0;
 }
 

@@ -9,8 +9,8 @@
 namespace hgrasp::app {
 
 struct RenderOptions {
-  std::string scenario;               ///< scenario YAML path
-  std::string out_dir;                ///< created if missing
+  std::string scenario;                            ///< scenario YAML path
+  std::string out_dir;                             ///< created if missing
   std::vector<std::int32_t> encoder_counts = {0};  ///< laser positions to render the stripe at
 };
 

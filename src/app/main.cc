@@ -1,9 +1,10 @@
 // hgrasp: the command. Parses the command line, runs one subcommand, maps errors to exit status
 // (DESIGN.md: 0 success, 1 the task failed, 2 bad input or usage).
 
+#include <spdlog/spdlog.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <spdlog/spdlog.h>
 
 #include "app/commands.h"
 #include "common/error.h"
@@ -14,8 +15,9 @@ int main(int argc, char** argv) {
 
   hgrasp::app::RenderOptions render;
   CLI::App* cmd_render =
-      app.add_subcommand("render", "Stereo images without and with the laser stripe, depth, "
-                                   "labels and ground truth from the simulated robot");
+      app.add_subcommand("render",
+                         "Stereo images without and with the laser stripe, depth, "
+                         "labels and ground truth from the simulated robot");
   cmd_render->add_option("scenario", render.scenario, "scenario YAML file")->required();
   cmd_render->add_option("--out", render.out_dir, "output directory")->required();
   cmd_render->add_option("--encoder", render.encoder_counts,

@@ -33,11 +33,11 @@ class InputError : public std::runtime_error {
 
 }  // namespace hgrasp
 
-#define HGRASP_DEMAND(cond)                                          \
-  do {                                                               \
+#define HGRASP_DEMAND(cond)                                             \
+  do {                                                                  \
     if (!(cond)) ::hgrasp::DemandFailed(#cond, __FILE__, __LINE__, ""); \
   } while (0)
-#define HGRASP_DEMAND_MSG(cond, msg)                                    \
-  do {                                                                  \
+#define HGRASP_DEMAND_MSG(cond, msg)                                     \
+  do {                                                                   \
     if (!(cond)) ::hgrasp::DemandFailed(#cond, __FILE__, __LINE__, msg); \
   } while (0)

@@ -25,7 +25,9 @@ struct Plane {
   }
 
   /// Mirror image of point p across the plane.
-  Eigen::Vector3d Reflect(const Eigen::Vector3d& p) const { return p - 2.0 * SignedDistance(p) * n; }
+  Eigen::Vector3d Reflect(const Eigen::Vector3d& p) const {
+    return p - 2.0 * SignedDistance(p) * n;
+  }
 
   /// Mirror image of another plane across this one.
   Plane Reflect(const Plane& other) const {

@@ -11,10 +11,10 @@ namespace hgrasp::device {
 using Joint6 = Eigen::Matrix<double, 6, 1>;  ///< joint angles (rad) or rates (rad/s), DH order
 
 struct ArmState {
-  double t_s = 0.0;               ///< time the joints were read (s, device clock)
-  Joint6 q = Joint6::Zero();      ///< joint angles (rad), models/humanoid.urdf convention
-  Joint6 qd = Joint6::Zero();     ///< joint rates (rad/s)
-  bool moving = false;            ///< a commanded motion is still under way
+  double t_s = 0.0;            ///< time the joints were read (s, device clock)
+  Joint6 q = Joint6::Zero();   ///< joint angles (rad), models/humanoid.urdf convention
+  Joint6 qd = Joint6::Zero();  ///< joint rates (rad/s)
+  bool moving = false;         ///< a commanded motion is still under way
 };
 
 /// One arm. Commands return at once; motion happens under the controller (joint-interpolated,

@@ -11,13 +11,13 @@ namespace hgrasp::device {
 
 /// One exposure of both cameras, with what the robot's encoders read at that moment.
 struct StereoFrame {
-  double t_s = 0.0;                   ///< exposure time (s)
-  std::uint64_t sequence = 0;         ///< frame number since start
-  cv::Mat left;                       ///< (240 x 320) CV_8UC3, BGR
-  cv::Mat right;                      ///< (240 x 320) CV_8UC3, BGR
+  double t_s = 0.0;                      ///< exposure time (s)
+  std::uint64_t sequence = 0;            ///< frame number since start
+  cv::Mat left;                          ///< (240 x 320) CV_8UC3, BGR
+  cv::Mat right;                         ///< (240 x 320) CV_8UC3, BGR
   std::int32_t laser_encoder_count = 0;  ///< laser encoder latched at exposure
   bool laser_on = false;
-  HeadJoints head;                    ///< head joints latched at exposure (rad)
+  HeadJoints head;  ///< head joints latched at exposure (rad)
 };
 
 class StereoCamera {

@@ -28,7 +28,9 @@ Result RunHgrasp(const std::string& args) {
   return r;
 }
 
-std::string Data(const std::string& name) { return std::string(HGRASP_TEST_DATA) + "/scenarios/" + name; }
+std::string Data(const std::string& name) {
+  return std::string(HGRASP_TEST_DATA) + "/scenarios/" + name;
+}
 
 struct BadCase {
   const char* file;
@@ -40,7 +42,8 @@ class BadScenarioTest : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(BadScenarioTest, ExitsTwoNamingFileFieldAndValue) {
   const BadCase& c = GetParam();
-  const auto out_dir = std::filesystem::temp_directory_path() / ("hgrasp_bad_" + std::string(c.file));
+  const auto out_dir =
+      std::filesystem::temp_directory_path() / ("hgrasp_bad_" + std::string(c.file));
   std::filesystem::remove_all(out_dir);
   const Result r = RunHgrasp("render " + Data(c.file) + " --out " + out_dir.string());
   EXPECT_EQ(r.status, 2) << r.output;
@@ -69,8 +72,9 @@ TEST(CliTest, UsageErrorsExitTwo) {
 TEST(CliTest, RenderWritesImagesAndTruth) {
   const auto out = std::filesystem::temp_directory_path() / "hgrasp_cli_render";
   std::filesystem::remove_all(out);
-  const Result r = RunHgrasp("render " + std::string(HGRASP_ROOT_DIR) + "/scenarios/default.yaml --out " +
-                       out.string() + " --encoder -500 0 500");
+  const Result r =
+      RunHgrasp("render " + std::string(HGRASP_ROOT_DIR) + "/scenarios/default.yaml --out " +
+                out.string() + " --encoder -500 0 500");
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* f : {"left.png", "right.png", "left_stripe_-500.png", "right_stripe_500.png",
                         "depth_left.png", "labels_right.png", "stereo_pair.png", "truth.json"}) {

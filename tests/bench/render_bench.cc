@@ -14,7 +14,8 @@ namespace {
 
 std::unique_ptr<SimRobot> DefaultRobot() {
   setenv("HGRASP_ROOT", HGRASP_SOURCE_ROOT, 0);
-  return std::make_unique<SimRobot>(LoadScenario(std::string(HGRASP_SOURCE_ROOT) + "/scenarios/default.yaml"));
+  return std::make_unique<SimRobot>(
+      LoadScenario(std::string(HGRASP_SOURCE_ROOT) + "/scenarios/default.yaml"));
 }
 
 void BM_StereoFrameFullRender(benchmark::State& state) {

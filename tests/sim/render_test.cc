@@ -21,7 +21,8 @@ constexpr double kMarkerRadius = 0.02;
 // Centre of the image of a sphere (centre p_C in the camera frame, radius r): the centre of the
 // ellipse x^T (c c^T - (|c|^2 - r^2) I) x = 0 in normalised coordinates, mapped to pixels.
 Eigen::Vector2d SphereImageCentre(const PinholeCamera& k, const Eigen::Vector3d& c, double r) {
-  const Eigen::Matrix3d Q = c * c.transpose() - (c.squaredNorm() - r * r) * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d Q =
+      c * c.transpose() - (c.squaredNorm() - r * r) * Eigen::Matrix3d::Identity();
   const Eigen::Vector2d centre = -Q.topLeftCorner<2, 2>().inverse() * Q.topRightCorner<2, 1>();
   return {k.fx * centre.x() + k.cx, k.fy * centre.y() + k.cy};
 }
@@ -49,7 +50,7 @@ StereoRig* RenderTest::rig_ = nullptr;
 TEST_F(RenderTest, MarkedPointRendersWherePinholeModelPredicts) {
   const int marker = world_->Id(mjOBJ_GEOM, "marker");
   // Spread over the workspace, each marker clear of the table (z > radius).
-  const Eigen::Vector3d points_W[] = {{0.30, 0.00, 0.05}, {0.22, 0.12, 0.03}, {0.40, -0.14, 0.10},
+  const Eigen::Vector3d points_W[] = {{0.30, 0.00, 0.05},  {0.22, 0.12, 0.03}, {0.40, -0.14, 0.10},
                                       {0.25, -0.10, 0.15}, {0.38, 0.15, 0.04}, {0.45, 0.0, 0.25}};
   double worst = 0.0;
   for (const Eigen::Vector3d& p_W : points_W) {
@@ -66,7 +67,9 @@ TEST_F(RenderTest, MarkedPointRendersWherePinholeModelPredicts) {
       const double error = (Eigen::Vector2d(su / n, sv / n) - predicted).norm();
       worst = std::max(worst, error);
       EXPECT_LT(error, 0.25) << "camera " << cam << " point " << p_W.transpose();
-      if (std::getenv("HGRASP_VERBOSE")) std::printf("  cam %d du %+.3f dv %+.3f n %.0f\n", cam, su / n - predicted.x(), sv / n - predicted.y(), n);
+      if (std::getenv("HGRASP_VERBOSE"))
+        std::printf("  cam %d du %+.3f dv %+.3f n %.0f\n", cam, su / n - predicted.x(),
+                    sv / n - predicted.y(), n);
     }
   }
   RecordProperty("worst_pixel_error", std::to_string(worst));
@@ -121,7 +124,8 @@ objects:
       for (int c = 0; c < view.images.label.cols; ++c) {
         const int label = view.images.label.at<int>(r, c);
         const float z = view.images.depth.at<float>(r, c);
-        ASSERT_EQ(label < 0, z <= 0) << "label and depth disagree on emptiness at " << r << "," << c;
+        ASSERT_EQ(label < 0, z <= 0)
+            << "label and depth disagree on emptiness at " << r << "," << c;
         if (label < 0) {
           ++background;
           continue;
@@ -130,8 +134,8 @@ objects:
         const Eigen::Vector3d ray_C = view.camera.Ray(c, r);
         const Eigen::Vector3d dir_W = (view.X_WC.linear() * ray_C).normalized();
         int geom = -1;
-        const double hit = mj_ray(world.model(), world.data(), origin.data(), dir_W.data(),
-                                  visible, 1, -1, &geom);
+        const double hit =
+            mj_ray(world.model(), world.data(), origin.data(), dir_W.data(), visible, 1, -1, &geom);
         if (geom != label) continue;
         ++agree;
         // Depth is exact for flat geoms; curved ones are tessellated by the renderer.
@@ -141,8 +145,10 @@ objects:
       }
     }
     const double fraction = static_cast<double>(agree) / labelled;
-    std::printf("camera %d: %d labelled pixels, %.3f%% agree with ray casts, worst depth on boxes %.4f mm\n",
-                cam, labelled, 100 * fraction, 1e3 * worst_depth);
+    std::printf(
+        "camera %d: %d labelled pixels, %.3f%% agree with ray casts, worst depth on boxes %.4f "
+        "mm\n",
+        cam, labelled, 100 * fraction, 1e3 * worst_depth);
     // Curved geoms (robot capsules) are tessellated by the renderer: their outlines may differ
     // from the exact ray cast by a pixel.
     EXPECT_GT(fraction, 0.995);

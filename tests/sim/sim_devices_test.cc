@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <random>
 
 #include "tests/sim/sim_test_util.h"
@@ -18,7 +19,8 @@ using device::Status;
 
 class SimDevicesTest : public ::testing::Test {
  protected:
-  SimDevicesTest() : robot_(testing::ScenarioFromYaml(testing::kEmptyScene)), dev_(robot_.TakeDevices()) {}
+  SimDevicesTest()
+      : robot_(testing::ScenarioFromYaml(testing::kEmptyScene)), dev_(robot_.TakeDevices()) {}
   // Grabs frames until `done` or `max_frames`; returns the frames grabbed.
   template <typename F>
   int GrabUntil(F done, int max_frames) {
@@ -53,7 +55,12 @@ TEST_F(SimDevicesTest, HeadMovesToTargetWithinItsSpeedLimit) {
   dev_.head->Read(&s0);
   const device::HeadJoints target{0.3, s0.q.tilt - 0.1, s0.q.verge + 0.02};
   ASSERT_EQ(dev_.head->MoveTo(target), Status::kOk);
-  const int frames = GrabUntil([&] { dev_.head->Read(&s); return !s.moving && s.t_s > s0.t_s; }, 200);
+  const int frames = GrabUntil(
+      [&] {
+        dev_.head->Read(&s);
+        return !s.moving && s.t_s > s0.t_s;
+      },
+      200);
   GrabUntil([] { return false; }, 10);  // settle
   dev_.head->Read(&s);
   EXPECT_NEAR(s.q.pan, 0.3, 2e-3);
@@ -77,7 +84,8 @@ TEST_F(SimDevicesTest, ArmJointMoveArrivesTogetherWithinSpeedLimits) {
   for (int i = 0; i < 100; ++i) {
     dev_.cameras->Grab(&f);
     dev_.ArmOf(Side::kRight).Read(&s);
-    for (int j = 0; j < 6; ++j) worst_ratio = std::max(worst_ratio, std::abs(s.qd[j]) / DegToRad(limits_deg[j]));
+    for (int j = 0; j < 6; ++j)
+      worst_ratio = std::max(worst_ratio, std::abs(s.qd[j]) / DegToRad(limits_deg[j]));
   }
   EXPECT_LT((s.q - goal).cwiseAbs().maxCoeff(), 2e-3);
   EXPECT_LT(worst_ratio, 1.05);
@@ -98,7 +106,8 @@ TEST_F(SimDevicesTest, RelativeMoveInGripperFrameMovesTheGripperByThatMuch) {
   const Pose3 after = w.BodyPose(gripper);
   const Pose3 expected = before * delta;
   EXPECT_LT((after.translation() - expected.translation()).norm(), 1e-3);
-  EXPECT_LT(Eigen::AngleAxisd(after.linear().transpose() * expected.linear()).angle(), DegToRad(0.5));
+  EXPECT_LT(Eigen::AngleAxisd(after.linear().transpose() * expected.linear()).angle(),
+            DegToRad(0.5));
   Pose3 far = Pose3::Identity();
   far.translation() = Eigen::Vector3d(0, 0, 2.0);  // 2 m: out of reach
   EXPECT_EQ(dev_.ArmOf(Side::kLeft).MoveRelative(far), Status::kRejected);
@@ -157,7 +166,8 @@ TEST(SimRobotTest, AtHomeTheCamerasSeeNoPartOfTheRobot) {
     const cv::Mat& label = robot.rig().View(cam).images.label;
     int robot_pixels = 0;
     for (int r = 0; r < label.rows; ++r)
-      for (int c = 0; c < label.cols; ++c) robot_pixels += label.at<int>(r, c) >= 0 && label.at<int>(r, c) != table;
+      for (int c = 0; c < label.cols; ++c)
+        robot_pixels += label.at<int>(r, c) >= 0 && label.at<int>(r, c) != table;
     EXPECT_EQ(robot_pixels, 0) << "camera " << cam;
   }
 }
@@ -174,7 +184,8 @@ TEST(SimRobotTest, WorkspaceIsSeenByBothCamerasFromTheHomePose) {
         for (double z : {0.0, 0.15}) {
           const auto uv = view.camera.Project(view.X_WC.inverse() * Eigen::Vector3d(x, y, z));
           ASSERT_TRUE(uv.has_value());
-          EXPECT_TRUE(view.camera.Contains(*uv)) << "camera " << cam << " misses " << x << " " << y << " " << z;
+          EXPECT_TRUE(view.camera.Contains(*uv))
+              << "camera " << cam << " misses " << x << " " << y << " " << z;
         }
   }
 }
@@ -219,8 +230,10 @@ TEST(SimRobotTest, WorkspaceIsReachableByAnArm) {
               for (int start = 0; start < 6 && !ok; ++start) {
                 device::Joint6 q0;
                 for (int i = 0; i < 6; ++i) {
-                  const int j = world.Id(mjOBJ_JOINT, std::string(device::ToString(side)) + "_j" + std::to_string(i + 1));
-                  std::uniform_real_distribution<double> u(world.model()->jnt_range[2 * j], world.model()->jnt_range[2 * j + 1]);
+                  const int j = world.Id(mjOBJ_JOINT, std::string(device::ToString(side)) + "_j" +
+                                                          std::to_string(i + 1));
+                  std::uniform_real_distribution<double> u(world.model()->jnt_range[2 * j],
+                                                           world.model()->jnt_range[2 * j + 1]);
                   q0[i] = start == 0 ? 0.0 : u(rng);
                 }
                 ok = ArmInverseKinematics(world, side, X_WE, q0).has_value();
@@ -230,9 +243,41 @@ TEST(SimRobotTest, WorkspaceIsReachableByAnArm) {
             if (ok) break;
           }
           reached += ok;
-          EXPECT_TRUE(ok) << "no arm reaches (" << x << ", " << y << ", " << z << ") yaw " << yaw_deg;
+          EXPECT_TRUE(ok) << "no arm reaches (" << x << ", " << y << ", " << z << ") yaw "
+                          << yaw_deg;
         }
   std::printf("reach: %d of %d grasp targets reachable by an arm\n", reached, targets);
+}
+
+}  // namespace
+}  // namespace hgrasp::sim
+
+namespace hgrasp::sim {
+namespace {
+
+TEST(SimRobotTest, SameScenarioAndSeedGiveTheSameFrames) {
+  // DESIGN.md rule 6: every random draw comes from the scenario seed.
+  const auto scenario = [](int seed) {
+    return testing::ScenarioFromYaml("name: d\nseed: " + std::to_string(seed) +
+                                     "\ncamera_noise: 2\nobjects:\n  - {name: a, shape: box, "
+                                     "size: [0.06, 0.06, 0.06], position: [0.3, 0.0], color: "
+                                     "[0.9, 0.2, 0.2]}\n");
+  };
+  SimRobot a(scenario(7)), b(scenario(7)), c(scenario(8));
+  auto da = a.TakeDevices(), db = b.TakeDevices(), dc = c.TakeDevices();
+  for (auto* d : {&da, &db, &dc}) {
+    d->laser->SetLaser(true);
+    d->laser->MoveTo(500, 5000);
+  }
+  for (int k = 0; k < 3; ++k) {
+    device::StereoFrame fa, fb, fc;
+    da.cameras->Grab(&fa);
+    db.cameras->Grab(&fb);
+    dc.cameras->Grab(&fc);
+    EXPECT_EQ(cv::norm(fa.left, fb.left, cv::NORM_INF), 0);
+    EXPECT_EQ(cv::norm(fa.right, fb.right, cv::NORM_INF), 0);
+    EXPECT_GT(cv::norm(fa.left, fc.left, cv::NORM_INF), 0);  // another seed, other noise
+  }
 }
 
 }  // namespace

@@ -12,12 +12,14 @@
 
 namespace hgrasp::sim::testing {
 
-inline Scenario ScenarioFromYaml(const std::string& yaml) { return ParseScenario(yaml, "test.yaml"); }
+inline Scenario ScenarioFromYaml(const std::string& yaml) {
+  return ParseScenario(yaml, "test.yaml");
+}
 
 /// A mocap body named `name` carrying one geom (no collisions), parked below the table.
 inline std::string MocapProbe(const std::string& name, const std::string& geom_attributes) {
-  return "<body name=\"" + name + "\" mocap=\"true\" pos=\"0 0 -3\"><geom name=\"" + name +
-         "\" " + geom_attributes + " contype=\"0\" conaffinity=\"0\"/></body>\n";
+  return "<body name=\"" + name + "\" mocap=\"true\" pos=\"0 0 -3\"><geom name=\"" + name + "\" " +
+         geom_attributes + " contype=\"0\" conaffinity=\"0\"/></body>\n";
 }
 
 /// Places mocap body `name` at X_WB and updates the kinematics.

@@ -28,6 +28,14 @@ cv::Mat RedDifference(const cv::Mat& with, const cv::Mat& without) {
   return out;
 }
 
+// Both cameras' images with our laser off, then on, the scene unchanged.
+std::pair<StereoImages, StereoImages> DarkAndLit(World* world, StereoRig* rig) {
+  world->set_laser_on(false);
+  StereoImages dark = rig->Expose(0);
+  world->set_laser_on(true);
+  return {std::move(dark), rig->Expose(0)};
+}
+
 // Column u on image row `row` where the camera ray meets both `surface` and `light` planes
 // (bisection on the light-plane distance of the ray's surface point); nullopt if none in view.
 std::optional<double> PredictedColumn(const CameraView& view, int row, const Plane& surface_W,
@@ -50,7 +58,8 @@ std::optional<double> PredictedColumn(const CameraView& view, int row, const Pla
 // Intensity-weighted centroid of `diff` on `row` within +-5 px of `near`.
 std::optional<double> Centroid(const cv::Mat& diff, int row, double near) {
   double sw = 0, su = 0;
-  for (int c = std::max(0, int(std::lround(near)) - 5); c <= std::min(diff.cols - 1, int(std::lround(near)) + 5); ++c) {
+  for (int c = std::max(0, int(std::lround(near)) - 5);
+       c <= std::min(diff.cols - 1, int(std::lround(near)) + 5); ++c) {
     const int v = diff.at<int>(row, c);
     if (v > 0) sw += v, su += v * c;
   }
@@ -85,7 +94,8 @@ TEST(StripeTest, CentreOnAPlaneOfKnownPoseIsWhereLightPlaneMeetsTheRay) {
   // A plate 0.15 m above the table, turned 25 deg about a diagonal from facing the head.
   const Eigen::Vector3d centre(0.32, 0.02, 0.15);
   const Eigen::Vector3d towards = (Eigen::Vector3d(0.03, 0, 0.55) - centre).normalized();
-  Eigen::Matrix3d R = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), towards).toRotationMatrix();
+  Eigen::Matrix3d R =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), towards).toRotationMatrix();
   R = Eigen::AngleAxisd(DegToRad(25), Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix() * R;
   Pose3 X_WP = Pose3::Identity();
   X_WP.linear() = R;
@@ -100,10 +110,7 @@ TEST(StripeTest, CentreOnAPlaneOfKnownPoseIsWhereLightPlaneMeetsTheRay) {
   double worst = 0, sum2 = 0;
   for (int count : {-1200, 0, 900}) {
     SetJoint(&world, "laser", count * kLaserRadPerCount);
-    world.set_laser_on(false);
-    const StereoImages dark = rig.Expose(0);
-    world.set_laser_on(true);
-    const StereoImages lit = rig.Expose(0);
+    const auto [dark, lit] = DarkAndLit(&world, &rig);
     const Plane light_W = rig.LaserPlaneAt(count * kLaserRadPerCount);
     for (int cam : {kLeft, kRight}) {
       const CameraView& view = rig.View(cam);
@@ -113,7 +120,8 @@ TEST(StripeTest, CentreOnAPlaneOfKnownPoseIsWhereLightPlaneMeetsTheRay) {
         if (!u || *u < 6 || *u > view.camera.width - 7) continue;
         // Only rows where the plate itself is seen around the stripe.
         bool on_plate = true;
-        for (int c = int(*u) - 5; c <= int(*u) + 6; ++c) on_plate &= view.images.label.at<int>(row, c) == plate;
+        for (int c = int(*u) - 5; c <= int(*u) + 6; ++c)
+          on_plate &= view.images.label.at<int>(row, c) == plate;
         if (!on_plate) continue;
         const auto measured = Centroid(diff, row, *u);
         ASSERT_TRUE(measured.has_value()) << "no stripe on row " << row << " camera " << cam;
@@ -142,10 +150,7 @@ TEST(StripeTest, NoStripeInTheLasersShadow) {
   PlaceMocap(&world, "plate", X_WO);
   const int count = 0;  // the light plane y ~ 0 cuts the plate
   SetJoint(&world, "laser", count * kLaserRadPerCount);
-  world.set_laser_on(false);
-  const StereoImages dark = rig.Expose(0);
-  world.set_laser_on(true);
-  const StereoImages lit = rig.Expose(0);
+  const auto [dark, lit] = DarkAndLit(&world, &rig);
   const Plane light_W = rig.LaserPlaneAt(count * kLaserRadPerCount);
   const Plane table_W{Eigen::Vector3d::UnitZ(), 0.0};
   const Eigen::Vector3d source = rig.LaserSource();
@@ -159,7 +164,8 @@ TEST(StripeTest, NoStripeInTheLasersShadow) {
       const auto u = PredictedColumn(view, row, table_W, light_W);
       if (!u || *u < 5 || *u > view.camera.width - 6) continue;
       const Eigen::Vector3d ray_W = view.X_WC.linear() * view.camera.Ray(*u, row);
-      const Eigen::Vector3d p = view.X_WC.translation() - view.X_WC.translation().z() / ray_W.z() * ray_W;
+      const Eigen::Vector3d p =
+          view.X_WC.translation() - view.X_WC.translation().z() / ray_W.z() * ray_W;
       if (p.x() < 0.1 || p.x() > 0.85) continue;  // on the table
       // Classify by exact geometry, leaving out cases within 2 mm of the plate's edges.
       if (SegmentHitsBox(view.X_WC.translation(), p, X_WO, grown)) continue;  // hidden
@@ -175,7 +181,8 @@ TEST(StripeTest, NoStripeInTheLasersShadow) {
       }
     }
   }
-  std::printf("shadow: %d rows seen in the laser's shadow (no stripe), %d lit rows\n", shadowed, lit_rows);
+  std::printf("shadow: %d rows seen in the laser's shadow (no stripe), %d lit rows\n", shadowed,
+              lit_rows);
   EXPECT_GE(shadowed, 10);
   EXPECT_GE(lit_rows, 100);
 }
@@ -204,7 +211,8 @@ TEST(StripeTest, BrightnessFollowsSurfaceColourAndSaturates) {
       if (label == blue) peak_blue += x.peak, ++n_blue;
     }
     for (int r = 0; r < img.image[kLeft].rows; ++r)
-      for (int c = 0; c < img.image[kLeft].cols; ++c) saturated += img.image[kLeft].at<cv::Vec3b>(r, c)[2] == 255;
+      for (int c = 0; c < img.image[kLeft].cols; ++c)
+        saturated += img.image[kLeft].at<cv::Vec3b>(r, c)[2] == 255;
   }
   ASSERT_GT(n_yellow, 50);
   ASSERT_GT(n_blue, 50);
@@ -217,9 +225,15 @@ TEST(StripeTest, BrightnessFollowsSurfaceColourAndSaturates) {
 }
 
 TEST(StripeTest, InterferenceStripesAppearWithOurLaserOff) {
-  const std::string base = "name: interference\nobjects:\n  - {name: a, shape: box, size: [0.1, 0.1, 0.1], position: [0.3, 0.0], color: [0.9, 0.9, 0.9]}\n";
+  const std::string base =
+      "name: interference\nobjects:\n  - {name: a, shape: box, size: [0.1, 0.1, 0.1], position: "
+      "[0.3, 0.0], color: [0.9, 0.9, 0.9]}\n";
   for (bool with : {false, true}) {
-    World world(ScenarioFromYaml(base + (with ? "interference:\n  - {origin: [0.6, -0.8, 0.5], sweep_deg: [-20, 20], period_s: 1.5}\n  - {origin: [0.5, 0.9, 0.6], sweep_deg: [-15, 15], period_s: 2.0}\n" : "")));
+    World world(ScenarioFromYaml(
+        base +
+        (with ? "interference:\n  - {origin: [0.6, -0.8, 0.5], sweep_deg: [-20, 20], period_s: "
+                "1.5}\n  - {origin: [0.5, 0.9, 0.6], sweep_deg: [-15, 15], period_s: 2.0}\n"
+              : "")));
     StereoRig rig(&world);
     world.set_laser_on(false);
     int bright = 0;
@@ -262,7 +276,8 @@ objects:
         }
       }
     }
-    std::printf("specular %d: %d mirrored stripe rows, %d off the light plane\n", specular, mirrored, off_plane);
+    std::printf("specular %d: %d mirrored stripe rows, %d off the light plane\n", specular,
+                mirrored, off_plane);
     if (specular) {
       EXPECT_GT(mirrored, 20);
       // The mirror image meets our sheet along the mirror's face: points next to the mirror lie
@@ -277,7 +292,9 @@ objects:
 TEST(StripeTest, CachedSceneGivesTheImagesOfAFullRenderPerFrame) {
   // The scene held still while the laser turns: compositing from the per-head-pose render gives
   // exactly the images of a full render every frame.
-  const std::string yaml = std::string(kTwoColours).replace(std::string(kTwoColours).find("camera_noise: 0"), 15, "camera_noise: 2");
+  const std::string yaml =
+      std::string(kTwoColours)
+          .replace(std::string(kTwoColours).find("camera_noise: 0"), 15, "camera_noise: 2");
   World world(ScenarioFromYaml(yaml));
   StereoRig cached(&world), full(&world);
   full.set_cache_enabled(false);
@@ -296,7 +313,9 @@ TEST(StripeTest, CacheThroughTheDevicesStaysWithinOneGreyLevel) {
   // Through the devices the physics runs: resting boxes creep by fractions of a micrometre and
   // the laser motor's start jolts the head by about 2 urad. The cache ignores motions under
   // 1 um; the shading such motions change differs by at most one grey level.
-  const std::string yaml = std::string(kTwoColours).replace(std::string(kTwoColours).find("camera_noise: 0"), 15, "camera_noise: 2");
+  const std::string yaml =
+      std::string(kTwoColours)
+          .replace(std::string(kTwoColours).find("camera_noise: 0"), 15, "camera_noise: 2");
   SimRobot cached(ScenarioFromYaml(yaml)), full(ScenarioFromYaml(yaml));
   full.rig().set_cache_enabled(false);
   auto a = cached.TakeDevices(), b = full.TakeDevices();
