@@ -106,6 +106,7 @@ constexpr double kRampS = 0.04;
 // 0..1 position of a constant-speed move of `duration` s at time t: speed ramps up linearly
 // over kRampS, cruises, ramps down over kRampS (a DC motor's finite acceleration).
 double Trapezoid(double t, double duration) {
+  if (duration <= 0) return 1.0;  // already there
   if (duration <= 2 * kRampS) return Smoothstep(std::clamp(t / duration, 0.0, 1.0));
   const double v = 1.0 / (duration - kRampS);  // cruise speed, so that the ramps fit
   if (t <= 0) return 0.0;
@@ -251,6 +252,16 @@ void World::Step(double duration_s) {
   for (int i = 0; i < steps; ++i) {
     ApplyControllers();
     mj_step(model_, data_);
+    // MuJoCo answers a diverging simulation by resetting it to the model's zero pose and
+    // carrying on: never let that pass silently.
+    for (const mjtWarning w : {mjWARN_BADQPOS, mjWARN_BADQVEL, mjWARN_BADQACC, mjWARN_BADCTRL}) {
+      if (data_->warning[w].number > 0) {
+        throw std::runtime_error("the simulation became unstable at t = " +
+                                 std::to_string(data_->time) + " s (MuJoCo warning " +
+                                 std::to_string(static_cast<int>(w)) + ", index " +
+                                 std::to_string(data_->warning[w].lastinfo) + ")");
+      }
+    }
   }
 }
 

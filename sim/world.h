@@ -59,7 +59,8 @@ class World {
 
   double time() const { return data_->time; }
 
-  /// Advances simulated time by `duration_s`, running the joint motion generators.
+  /// Advances simulated time by `duration_s`, running the joint motion generators. Throws
+  /// std::runtime_error if the simulation diverges (NaN or huge state or control).
   void Step(double duration_s);
 
   /// Starts a synchronised move of `actuators` to `goal` (joint units): every joint arrives

@@ -282,3 +282,23 @@ TEST(SimRobotTest, SameScenarioAndSeedGiveTheSameFrames) {
 
 }  // namespace
 }  // namespace hgrasp::sim
+
+namespace hgrasp::sim {
+namespace {
+
+TEST(SimRobotTest, LaserMoveToWhereItIsKeepsTheSimulationSound) {
+  // A zero-length constant-speed move once put NaN into the laser's set-point, and MuJoCo reset
+  // the whole world to its zero pose.
+  SimRobot robot(testing::ScenarioFromYaml(testing::kEmptyScene));
+  auto dev = robot.TakeDevices();
+  const double tilt = robot.world().JointPosition("head_tilt");
+  ASSERT_EQ(dev.laser->MoveTo(0, 9000.0), device::Status::kOk);
+  device::StereoFrame frame;
+  for (int i = 0; i < 5; ++i) ASSERT_EQ(dev.cameras->Grab(&frame), device::Status::kOk);
+  EXPECT_EQ(robot.world().data()->warning[mjWARN_BADCTRL].number, 0);
+  EXPECT_NEAR(robot.world().JointPosition("head_tilt"), tilt, 1e-4);
+  EXPECT_EQ(frame.laser_encoder_count, 0);
+}
+
+}  // namespace
+}  // namespace hgrasp::sim
