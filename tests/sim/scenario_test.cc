@@ -16,6 +16,18 @@
 namespace hgrasp::sim {
 namespace {
 
+// The InputError that parsing `yaml` (named "inline.yaml") throws; a failure if none.
+InputError ParseError(const std::string& yaml) {
+  SCOPED_TRACE(yaml);
+  try {
+    ParseScenario(yaml, "inline.yaml");
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error for: " << yaml;
+  return InputError("", "", "", "");
+}
+
 namespace fs = std::filesystem;
 
 const std::string kFixtures = std::string(HGRASP_TEST_DATA) + "/scenarios/";
@@ -334,16 +346,11 @@ TEST(ScenarioTest, UnknownKeyAtEveryLevel) {
       {"name: t\ndevices:\n  head: {driver: sim,\n    bogus: 1}\n", "devices.head.bogus"},
   };
   for (const auto& c : cases) {
-    SCOPED_TRACE(c.yaml);
-    try {
-      ParseScenario(c.yaml, "inline.yaml");
-      ADD_FAILURE() << "no error";
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.field(), c.field);
-      EXPECT_EQ(e.value(), "bogus");
-      const int line = static_cast<int>(std::count(c.yaml.begin(), c.yaml.end(), '\n'));
-      EXPECT_EQ(e.file(), "inline.yaml:" + std::to_string(line)) << e.what();
-    }
+    const InputError e = ParseError(c.yaml);
+    EXPECT_EQ(e.field(), c.field);
+    EXPECT_EQ(e.value(), "bogus");
+    const int line = static_cast<int>(std::count(c.yaml.begin(), c.yaml.end(), '\n'));
+    EXPECT_EQ(e.file(), "inline.yaml:" + std::to_string(line)) << e.what();
   }
 }
 
@@ -415,14 +422,9 @@ TEST(ScenarioTest, MoreBadValues) {
       {"name: t\ndevices: []\n", "devices"},
   };
   for (const auto& c : cases) {
-    SCOPED_TRACE(c.yaml);
-    try {
-      ParseScenario(c.yaml, "inline.yaml");
-      ADD_FAILURE() << "no error";
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.field(), c.field) << e.what();
-      EXPECT_EQ(std::string(e.what()).rfind("inline.yaml", 0), 0u) << e.what();
-    }
+    const InputError e = ParseError(c.yaml);
+    EXPECT_EQ(e.field(), c.field) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("inline.yaml", 0), 0u) << e.what();
   }
 }
 
