@@ -103,8 +103,6 @@ TEST_F(RenderTest, DepthOfPlaneAtKnownDistance) {
   EXPECT_LT(worst, 0.0005);
   std::printf("plane depth: worst error %.3f mm over 0.40-1.00 m\n", 1e3 * worst);
   PlaceMocap(world_, "plate", Pose3(Eigen::Translation3d(0, 0, -3)));
-  mjModel* m = world_->mutable_model();
-  (void)m;
 }
 
 TEST(RenderLabelsTest, EachPixelsLabelIsTheGeomAtItsDepth) {
