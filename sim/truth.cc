@@ -1,5 +1,8 @@
 #include "sim/truth.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace hgrasp::sim {
 
 nlohmann::json PoseJson(const Pose3& X) {
@@ -58,6 +61,36 @@ nlohmann::json TruthJson(const World& world, const StereoRig& rig,
       {"source_W", {s.x(), s.y(), s.z()}},
       {"planes", planes}};
   return t;
+}
+
+double DistanceToBoxSurface(const Pose3& X_WO, const Eigen::Vector3d& size_O,
+                            const Eigen::Vector3d& p_W) {
+  const Eigen::Vector3d p_O = X_WO.inverse() * p_W;
+  // q: how far outside each pair of faces (negative: inside the slab).
+  const Eigen::Vector3d q = p_O.cwiseAbs() - 0.5 * size_O;
+  if ((q.array() > 0.0).any()) return q.cwiseMax(0.0).norm();
+  return -q.maxCoeff();
+}
+
+double DistanceToTrueSurface(const World& world, const Eigen::Vector3d& p_W) {
+  // The table: 4 cm thick below z = 0 (models/humanoid.xml, geom "table").
+  constexpr double kTableThickness = 0.04;
+  Pose3 X_W_table = Pose3::Identity();
+  X_W_table.translation() << 0.5 * (kTableMinX + kTableMaxX), 0.5 * (kTableMinY + kTableMaxY),
+      -0.5 * kTableThickness;
+  double d = DistanceToBoxSurface(
+      X_W_table, Eigen::Vector3d(kTableMaxX - kTableMinX, kTableMaxY - kTableMinY, kTableThickness),
+      p_W);
+  if (const auto& wall_x = world.scenario().wall_x) {
+    // Must match the wall geom of World (sim/world.cc, ObjectsXml): 2 cm thick, 2 m wide, 1 m
+    // high, its near face the plane x = wall_x.
+    Pose3 X_W_wall = Pose3::Identity();
+    X_W_wall.translation() << *wall_x + 0.01, 0.0, 0.5;
+    d = std::min(d, DistanceToBoxSurface(X_W_wall, Eigen::Vector3d(0.02, 2.0, 1.0), p_W));
+  }
+  for (const SimObject& o : world.objects())
+    d = std::min(d, DistanceToBoxSurface(world.BodyPose(o.body), o.spec.size_O, p_W));
+  return d;
 }
 
 }  // namespace hgrasp::sim

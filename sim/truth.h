@@ -19,4 +19,17 @@ nlohmann::json PoseJson(const Pose3& X);
 nlohmann::json TruthJson(const World& world, const StereoRig& rig,
                          const std::vector<std::int32_t>& encoder_counts);
 
+/// Distance (m) from p_W to the nearest true surface of the world: the table (a box, x
+/// kTableMinX..kTableMaxX, y kTableMinY..kTableMaxY, z -0.04..0, see sim/scenario.h), the wall if
+/// the scenario has one (the box the world builds: x wall_x..wall_x + 0.02, y -1..1, z 0..1; its
+/// face x = wall_x faces the robot), and every scenario object (a box of size spec.size_O at its
+/// current pose world.BodyPose(body)). The robot's own geometry is not included. Exact unsigned
+/// distance to each box's surface: from inside a box, the distance to its nearest face.
+double DistanceToTrueSurface(const World& world, const Eigen::Vector3d& p_W);
+
+/// Unsigned distance (m) from p_W to the surface of the box of full edge lengths `size_O`
+/// centred at X_WO; inside the box, the distance to the nearest face.
+double DistanceToBoxSurface(const Pose3& X_WO, const Eigen::Vector3d& size_O,
+                            const Eigen::Vector3d& p_W);
+
 }  // namespace hgrasp::sim

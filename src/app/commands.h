@@ -18,4 +18,29 @@ struct RenderOptions {
 /// truth.json, from the simulated robot in its home pose.
 int Render(const RenderOptions& options);
 
+/// Calibration files the pipeline reads (the simulated robot's by default).
+struct CalibrationFiles {
+  std::string cameras = "calibration/sim/cameras.yaml";
+  std::string laser = "calibration/sim/laser.yaml";
+};
+
+struct CalibrateLaserOptions {
+  std::string scenario;  ///< a scene with a non-planar target
+  std::string out_file;  ///< the laser calibration YAML to write
+  CalibrationFiles files;
+};
+
+/// `hgrasp calibrate laser`: the laser's self-calibration (paper eq. 6) over a sweep.
+int CalibrateLaser(const CalibrateLaserOptions& options);
+
+struct ScanOptions {
+  std::string scenario;
+  std::string out_dir;
+  CalibrationFiles files;
+  bool single_camera = false;  ///< light-plane triangulation from the left camera only
+};
+
+/// `hgrasp scan`: one laser sweep: range.ply, range.png and report.json.
+int Scan(const ScanOptions& options);
+
 }  // namespace hgrasp::app

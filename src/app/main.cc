@@ -23,6 +23,29 @@ int main(int argc, char** argv) {
   cmd_render->add_option("--encoder", render.encoder_counts,
                          "laser encoder counts to render the stripe at (0.01 deg/count)");
 
+  hgrasp::app::CalibrateLaserOptions calibrate;
+  CLI::App* cmd_calibrate = app.add_subcommand("calibrate", "Self-calibration");
+  cmd_calibrate->require_subcommand(1);
+  CLI::App* cmd_calibrate_laser = cmd_calibrate->add_subcommand(
+      "laser",
+      "The laser's light plane against encoder count, from a sweep over any non-planar "
+      "target (Taylor & Kleeman eq. 6)");
+  cmd_calibrate_laser->add_option("scenario", calibrate.scenario, "scenario YAML file")->required();
+  cmd_calibrate_laser->add_option("--out", calibrate.out_file, "laser calibration YAML to write")
+      ->required();
+  cmd_calibrate_laser->add_option("--cameras", calibrate.files.cameras, "camera intrinsics YAML");
+
+  hgrasp::app::ScanOptions scan;
+  CLI::App* cmd_scan = app.add_subcommand(
+      "scan", "One stereo laser-stripe sweep: range.ply, range.png, report.json");
+  cmd_scan->add_option("scenario", scan.scenario, "scenario YAML file")->required();
+  cmd_scan->add_option("--out", scan.out_dir, "output directory")->required();
+  cmd_scan->add_option("--cameras", scan.files.cameras, "camera intrinsics YAML");
+  cmd_scan->add_option("--laser", scan.files.laser, "laser calibration YAML");
+  cmd_scan->add_flag("--single-camera", scan.single_camera,
+                     "light-plane triangulation from the left camera alone, no stereo validation "
+                     "(for comparison)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -31,6 +54,8 @@ int main(int argc, char** argv) {
   }
   try {
     if (*cmd_render) return hgrasp::app::Render(render);
+    if (*cmd_calibrate_laser) return hgrasp::app::CalibrateLaser(calibrate);
+    if (*cmd_scan) return hgrasp::app::Scan(scan);
   } catch (const hgrasp::InputError& e) {
     std::fprintf(stderr, "hgrasp: %s\n", e.what());
     return 2;

@@ -1,0 +1,495 @@
+#include "robot/calibration.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Geometry>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include "common/error.h"
+
+namespace hgrasp::robot {
+namespace {
+
+// The frame a laser calibration is expressed in.
+constexpr char kFrameH[] = "camera_bracket";
+// Tolerance on the unit length of axis_H and normal0_H.
+constexpr double kUnitTolerance = 1e-6;
+
+// ---------------------------------------------------------------------------------------------
+// Scalars, strictly: a number is a plain (unquoted) decimal scalar, finite; no YAML 1.1 octal or
+// hexadecimal, no .inf or .nan.
+
+bool IsQuoted(const YAML::Node& n) { return n.Tag() == "!"; }
+
+std::optional<double> ParseNumber(const YAML::Node& n) {
+  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  std::string_view s = n.Scalar();
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty() || s.front() == '+') return std::nullopt;
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::optional<long long> ParseInteger(const YAML::Node& n) {
+  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  std::string_view s = n.Scalar();
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty() || s.front() == '+') return std::nullopt;
+  long long v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+// A node as the user wrote it, for error messages: a scalar verbatim, a collection in flow style;
+// null or missing as "" (InputError says "missing or empty").
+void RenderTo(const YAML::Node& n, bool top, std::string* out) {
+  if (!n.IsDefined() || n.IsNull()) return;
+  if (n.IsScalar()) {
+    *out += !top && IsQuoted(n) ? "\"" + n.Scalar() + "\"" : n.Scalar();
+  } else if (n.IsSequence()) {
+    *out += "[";
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      if (i > 0) *out += ", ";
+      RenderTo(n[i], false, out);
+    }
+    *out += "]";
+  } else if (n.IsMap()) {
+    *out += "{";
+    bool first = true;
+    for (const auto& kv : n) {
+      if (!first) *out += ", ";
+      first = false;
+      RenderTo(kv.first, false, out);
+      *out += ": ";
+      RenderTo(kv.second, false, out);
+    }
+    *out += "}";
+  }
+}
+
+std::string Render(const YAML::Node& n) {
+  std::string text;
+  RenderTo(n, true, &text);
+  constexpr std::size_t kMaxChars = 100;
+  if (text.size() > kMaxChars) text = text.substr(0, kMaxChars - 3) + "...";
+  return text;
+}
+
+std::string Join(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+using Keys = std::vector<std::string_view>;
+
+std::string OneOf(const Keys& names) {
+  std::string s = "one of: ";
+  for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + std::string(names[i]);
+  return s;
+}
+
+// %.17g: enough significant digits for any double to read back exactly.
+std::string Exact(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The reader: every check names "FILE:LINE", the field path, the value and what was expected.
+
+struct Entry {
+  YAML::Node key, value;
+};
+using Entries = std::map<std::string, Entry>;
+
+class Reader {
+ public:
+  explicit Reader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void Fail(const YAML::Mark& mark, const std::string& field, const std::string& value,
+                         const std::string& expected) const {
+    throw InputError(Where(mark), field, value, expected);
+  }
+
+  [[noreturn]] void Fail(const YAML::Node& at, const std::string& field,
+                         const std::string& expected) const {
+    Fail(at.Mark(), field, Render(at), expected);
+  }
+
+  // The file's single YAML document, a map.
+  YAML::Node Root(const std::string& text, const std::string& expected) const {
+    std::vector<YAML::Node> docs;
+    try {
+      docs = YAML::LoadAll(text);
+    } catch (const YAML::Exception& e) {
+      // The offending line as written, so the user sees what the parser choked on.
+      std::string line;
+      if (e.mark.line >= 0) {
+        std::istringstream in(text);
+        for (int i = 0; i <= e.mark.line && std::getline(in, line); ++i) {
+        }
+        const auto first = line.find_first_not_of(" \t");
+        line = first == std::string::npos ? "" : line.substr(first);
+      }
+      Fail(e.mark, "YAML syntax", line.empty() ? e.msg : line, "well-formed YAML (" + e.msg + ")");
+    }
+    if (docs.empty() || docs.front().IsNull()) {
+      Fail(YAML::Mark::null_mark(), "top level", "", expected + " (the file is empty)");
+    }
+    if (docs.size() > 1) Fail(docs[1].Mark(), "top level", "---", "a single YAML document");
+    if (!docs.front().IsMap()) Fail(docs.front(), "top level", expected);
+    return docs.front();
+  }
+
+  // Checks that `n` is a map whose keys are all in `allowed`, each once; returns its entries.
+  Entries MapOf(const YAML::Node& n, const std::string& field, const Keys& allowed,
+                const std::string& expected) const {
+    if (!n.IsMap()) Fail(n, field.empty() ? "top level" : field, expected);
+    Entries entries;
+    for (const auto& kv : n) {
+      const YAML::Node& key = kv.first;
+      const std::string name = key.IsScalar() ? key.Scalar() : Render(key);
+      bool known = false;
+      for (std::string_view a : allowed) known = known || name == a;
+      if (!key.IsScalar() || !known) {
+        Fail(key.Mark(), Join(field, name), name, "a known key here, " + OneOf(allowed));
+      }
+      if (entries.count(name) != 0) {
+        Fail(key.Mark(), Join(field, name), name,
+             "each key once (it is also on line " +
+                 std::to_string(entries.at(name).key.Mark().line + 1) + ")");
+      }
+      entries.emplace(name, Entry{key, kv.second});
+    }
+    return entries;
+  }
+
+  // The value of `key` in `map`; missing names the map's line.
+  const YAML::Node& Require(const Entries& entries, const YAML::Node& map, const std::string& field,
+                            std::string_view key, const std::string& expected) const {
+    const auto it = entries.find(std::string(key));
+    if (it == entries.end()) Fail(map.Mark(), Join(field, key), "", expected);
+    return it->second.value;
+  }
+
+  double Number(const YAML::Node& n, const std::string& field, const std::string& expected) const {
+    const std::optional<double> v = ParseNumber(n);
+    if (!v) Fail(n, field, expected + QuoteHint(n));
+    return *v;
+  }
+
+  long long Integer(const YAML::Node& n, const std::string& field,
+                    const std::string& expected) const {
+    const std::optional<long long> v = ParseInteger(n);
+    if (!v) Fail(n, field, expected + QuoteHint(n));
+    return *v;
+  }
+
+  Eigen::Vector3d Vector3(const YAML::Node& n, const std::string& field,
+                          const std::string& expected) const {
+    if (!n.IsSequence() || n.size() != 3) Fail(n, field, expected);
+    Eigen::Vector3d v;
+    for (int i = 0; i < 3; ++i) {
+      const std::optional<double> x = ParseNumber(n[i]);
+      if (!x) Fail(n, field, expected + QuoteHint(n));
+      v[i] = *x;
+    }
+    return v;
+  }
+
+  std::string Text(const YAML::Node& n, const std::string& field,
+                   const std::string& expected) const {
+    if (!n.IsScalar() || n.Scalar().empty()) Fail(n, field, expected);
+    return n.Scalar();
+  }
+
+ private:
+  std::string Where(const YAML::Mark& mark) const {
+    if (mark.line < 0) return path_;
+    return path_ + ":" + std::to_string(mark.line + 1);
+  }
+
+  // Said after "expected ..." when a number was written in quotes.
+  static std::string QuoteHint(const YAML::Node& n) {
+    bool quoted = n.IsScalar() && IsQuoted(n);
+    if (n.IsSequence()) {
+      for (std::size_t i = 0; i < n.size(); ++i) {
+        quoted = quoted || (n[i].IsScalar() && IsQuoted(n[i]));
+      }
+    }
+    return quoted ? " (numbers go without quotes)" : "";
+  }
+
+  std::string path_;
+};
+
+// The whole file as text; `expected` names the kind of file in errors.
+std::string ReadFile(const std::string& path, const std::string& expected) {
+  namespace fs = std::filesystem;
+  if (path.empty()) throw InputError("", "file name", "", expected);
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) throw InputError(path, "", path, expected);
+  if (fs::is_directory(status)) throw InputError(path, "", path, expected + ", not a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", path, expected + ": " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path, "", path, expected + ": read failed");
+  return text.str();
+}
+
+// Runs `parse`, turning anything yaml-cpp throws beyond a syntax error into an InputError.
+template <typename Parse>
+auto Guarded(const std::string& path, const std::string& expected, Parse parse) {
+  try {
+    return parse();
+  } catch (const YAML::Exception& e) {
+    const std::string where = e.mark.line < 0 ? path : path + ":" + std::to_string(e.mark.line + 1);
+    throw InputError(where, "", e.msg, expected);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Intrinsics.
+
+PinholeCamera ParseCamera(const Reader& r, const YAML::Node& n, const std::string& field) {
+  const Entries e = r.MapOf(n, field, {"width", "height", "fx", "fy", "cx", "cy"},
+                            "a camera: a map with width, height, fx, fy, cx, cy");
+  PinholeCamera c;
+  const auto size = [&](std::string_view key, const std::string& what) {
+    const std::string expected = "the image " + what + ", a positive integer number of pixels";
+    const YAML::Node& v = r.Require(e, n, field, key, expected);
+    const long long pixels = r.Integer(v, Join(field, key), expected);
+    if (pixels <= 0 || pixels > 100000) r.Fail(v, Join(field, key), expected);
+    return static_cast<int>(pixels);
+  };
+  c.width = size("width", "width");
+  c.height = size("height", "height");
+
+  const auto focal = [&](std::string_view key, const char* axis) {
+    const std::string expected =
+        std::string("a positive focal length along ") + axis + " in pixels";
+    const YAML::Node& v = r.Require(e, n, field, key, expected);
+    const double f = r.Number(v, Join(field, key), expected);
+    if (f <= 0.0) r.Fail(v, Join(field, key), expected);
+    return f;
+  };
+  c.fx = focal("fx", "u");
+  c.fy = focal("fy", "v");
+
+  const auto centre = [&](std::string_view key, const char* axis, int pixels) {
+    const std::string expected = std::string("the principal point's ") + axis +
+                                 " in pixels, inside the image (-0.5 to " +
+                                 std::to_string(pixels - 1) + ".5)";
+    const YAML::Node& v = r.Require(e, n, field, key, expected);
+    const double x = r.Number(v, Join(field, key), expected);
+    if (x < -0.5 || x > pixels - 0.5) r.Fail(v, Join(field, key), expected);
+    return x;
+  };
+  c.cx = centre("cx", "u", c.width);
+  c.cy = centre("cy", "v", c.height);
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Laser.
+
+// Why `c` cannot be saved or was not loaded; empty when it is consistent. `field` is set to the
+// offending field.
+std::string LaserProblem(const LaserCalibration& c, std::string* field) {
+  const auto finite = [](const Eigen::Vector3d& v) { return v.allFinite(); };
+  if (!finite(c.axis_H) || std::abs(c.axis_H.norm() - 1.0) > kUnitTolerance) {
+    *field = "axis_H";
+    return "a unit vector (length 1 within 1e-6)";
+  }
+  if (!finite(c.point_H)) {
+    *field = "point_H";
+    return "a finite point";
+  }
+  if (!finite(c.normal0_H) || std::abs(c.normal0_H.norm() - 1.0) > kUnitTolerance) {
+    *field = "normal0_H";
+    return "a unit vector (length 1 within 1e-6)";
+  }
+  // A lens a little off square on its mount turns the sheet's normal on a cone about the axis:
+  // the normal need not be perpendicular to the axis, but a sheet whose normal lies within
+  // 60 deg of its turning axis is no stripe scanner.
+  const double cos_angle = c.axis_H.dot(c.normal0_H);
+  if (std::abs(cos_angle) > 0.5) {
+    *field = "normal0_H";
+    char dot[32];
+    std::snprintf(dot, sizeof dot, "%.3g", cos_angle);
+    return std::string("a normal at least 60 deg from axis_H (axis_H . normal0_H is ") + dot + ")";
+  }
+  if (!std::isfinite(c.offset_m)) {
+    *field = "offset_m";
+    return "a finite distance in m";
+  }
+  if (!std::isfinite(c.rad_per_count) || c.rad_per_count <= 0.0) {
+    *field = "rad_per_count";
+    return "a positive encoder resolution in rad per count";
+  }
+  if (!std::isfinite(c.rms_residual_px) || c.rms_residual_px < 0.0) {
+    *field = "rms_residual_px";
+    return "a non-negative RMS residual in pixels";
+  }
+  if (c.counts_used < 0) {
+    *field = "counts_used";
+    return "a non-negative number of encoder counts";
+  }
+  return "";
+}
+
+LaserCalibration ParseLaser(const std::string& text, const std::string& path) {
+  const Reader r(path);
+  const std::string top_expected =
+      "a laser calibration: a map with frame, axis_H, point_H, normal0_H, offset_m, "
+      "rad_per_count, rms_residual_px, counts_used";
+  const YAML::Node root = r.Root(text, top_expected);
+  const Entries e = r.MapOf(root, "",
+                            {"frame", "axis_H", "point_H", "normal0_H", "offset_m", "rad_per_count",
+                             "rms_residual_px", "counts_used"},
+                            top_expected);
+  std::map<std::string, YAML::Node> nodes;  // by field, for the checks across fields
+  const auto get = [&](const std::string& key, const std::string& expected) {
+    const YAML::Node& n = r.Require(e, root, "", key, expected);
+    nodes.emplace(key, n);
+    return n;
+  };
+
+  const std::string frame_expected = std::string("the frame ") + kFrameH;
+  const YAML::Node frame = get("frame", frame_expected);
+  if (r.Text(frame, "frame", frame_expected) != kFrameH) r.Fail(frame, "frame", frame_expected);
+
+  LaserCalibration c;
+  const std::string axis_expected = "the unit rotation axis in H, as [x, y, z]";
+  c.axis_H = r.Vector3(get("axis_H", axis_expected), "axis_H", axis_expected);
+  const std::string point_expected = "a point on the rotation axis in H in m, as [x, y, z]";
+  c.point_H = r.Vector3(get("point_H", point_expected), "point_H", point_expected);
+  const std::string normal_expected = "the plane's unit normal at count 0 in H, as [x, y, z]";
+  c.normal0_H = r.Vector3(get("normal0_H", normal_expected), "normal0_H", normal_expected);
+  const std::string offset_expected = "the plane's distance from the axis in m";
+  c.offset_m = r.Number(get("offset_m", offset_expected), "offset_m", offset_expected);
+  const std::string rpc_expected = "a positive encoder resolution in rad per count";
+  c.rad_per_count = r.Number(get("rad_per_count", rpc_expected), "rad_per_count", rpc_expected);
+  const std::string rms_expected = "a non-negative RMS residual in pixels";
+  c.rms_residual_px =
+      r.Number(get("rms_residual_px", rms_expected), "rms_residual_px", rms_expected);
+  const std::string used_expected = "a non-negative number of encoder counts";
+  const YAML::Node used = get("counts_used", used_expected);
+  const long long counts_used = r.Integer(used, "counts_used", used_expected);
+  if (counts_used < 0 || counts_used > 2147483647LL) r.Fail(used, "counts_used", used_expected);
+  c.counts_used = static_cast<int>(counts_used);
+
+  std::string field;
+  const std::string expected = LaserProblem(c, &field);
+  if (!expected.empty()) r.Fail(nodes.at(field), field, expected);
+  return c;
+}
+
+}  // namespace
+
+StereoIntrinsics LoadStereoIntrinsics(const std::string& path) {
+  const std::string text = ReadFile(path, "a readable camera intrinsics file");
+  const std::string top_expected =
+      "camera intrinsics: a map with left and right, each {width, height, fx, fy, cx, cy}";
+  return Guarded(path, top_expected, [&] {
+    const Reader r(path);
+    const YAML::Node root = r.Root(text, top_expected);
+    const Entries e = r.MapOf(root, "", {"left", "right"}, top_expected);
+    StereoIntrinsics s;
+    s.left = ParseCamera(r, r.Require(e, root, "", "left", "the left camera's intrinsics"), "left");
+    s.right =
+        ParseCamera(r, r.Require(e, root, "", "right", "the right camera's intrinsics"), "right");
+    return s;
+  });
+}
+
+Plane LaserCalibration::PlaneH(std::int32_t count) const {
+  const double theta = rad_per_count * static_cast<double>(count);
+  Plane plane;
+  plane.n = Eigen::AngleAxisd(theta, axis_H) * normal0_H;
+  plane.d = -plane.n.dot(point_H) - offset_m;
+  return plane;
+}
+
+LaserCalibration LoadLaserCalibration(const std::string& path) {
+  const std::string text = ReadFile(path, "a readable laser calibration file");
+  return Guarded(path, "a laser calibration file", [&] { return ParseLaser(text, path); });
+}
+
+void SaveLaserCalibration(const LaserCalibration& c, const std::string& path) {
+  std::string field;
+  const std::string problem = LaserProblem(c, &field);
+  HGRASP_DEMAND_MSG(problem.empty(), "laser calibration " + field + ": expected " + problem);
+
+  const auto vec = [](const Eigen::Vector3d& v) {
+    return "[" + Exact(v.x()) + ", " + Exact(v.y()) + ", " + Exact(v.z()) + "]";
+  };
+  std::string text;
+  text +=
+      "# hgrasp laser calibration: the laser's light plane turning about an axis fixed in the\n"
+      "# head. Frame H is the URDF link camera_bracket (models/humanoid.urdf), the head platform\n"
+      "# carrying the cameras and the laser. Lengths in m, angles in rad. At encoder count e:\n"
+      "#   theta = rad_per_count * e\n"
+      "#   n(e) = Rot(axis_H, theta) * normal0_H\n"
+      "#   light plane = {p in H : n(e) . (p - point_H) - offset_m = 0}\n"
+      "# frame:           the frame of the vectors below, always camera_bracket\n"
+      "# axis_H:          unit direction of the rotation axis, in H\n"
+      "# point_H:         a point on the rotation axis, in H (m)\n"
+      "# normal0_H:       unit normal of the plane at count 0 (turning on a cone about axis_H), in "
+      "H\n"
+      "# offset_m:        signed distance of the plane from the axis along n(e) (m)\n"
+      "# rad_per_count:   encoder resolution (rad per count)\n"
+      "# rms_residual_px: RMS residual of the fit (pixels), for information\n"
+      "# counts_used:     how many encoder counts the fit used, for information\n";
+  text += std::string("frame: ") + kFrameH + "\n";
+  text += "axis_H: " + vec(c.axis_H) + "\n";
+  text += "point_H: " + vec(c.point_H) + "\n";
+  text += "normal0_H: " + vec(c.normal0_H) + "\n";
+  text += "offset_m: " + Exact(c.offset_m) + "\n";
+  text += "rad_per_count: " + Exact(c.rad_per_count) + "\n";
+  text += "rms_residual_px: " + Exact(c.rms_residual_px) + "\n";
+  text += "counts_used: " + std::to_string(c.counts_used) + "\n";
+
+  // Written whole or not at all: a temporary file next to the target, renamed into place.
+  namespace fs = std::filesystem;
+  const std::string expected = "a writable path for the laser calibration";
+  if (path.empty()) throw InputError("", "output file", "", expected);
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path, "", path, expected + ": " + std::strerror(errno));
+    out << text;
+    out.close();
+    if (!out) {
+      std::error_code ignored;
+      fs::remove(tmp, ignored);
+      throw InputError(path, "", path, expected + ": write failed");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw InputError(path, "", path, expected + ": " + ec.message());
+  }
+}
+
+}  // namespace hgrasp::robot

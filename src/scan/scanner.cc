@@ -1,0 +1,238 @@
+#include "scan/scanner.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <set>
+
+#include "common/error.h"
+#include "scan/laser_self_calibration.h"
+
+namespace hgrasp::scan {
+namespace {
+
+constexpr double kFramePeriodS = 0.04;    // PAL, 25 frames/s
+constexpr double kSlewCountsPerS = 9000;  // fast move to the start of a sweep
+
+// Grabs frames until the laser stops; the last frame has it at rest.
+device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* frame) {
+  device::StripeLaserState s;
+  for (int i = 0; i < 1000; ++i) {
+    if (const auto st = dev.cameras->Grab(frame); st != device::Status::kOk) return st;
+    if (const auto st = dev.laser->Read(&s); st != device::Status::kOk) return st;
+    if (!s.moving) return device::Status::kOk;
+  }
+  return device::Status::kTimeout;
+}
+
+// Bilinear colour (RGB, 0-1) of a BGR image at pixel (u, v); nullopt outside.
+std::optional<Eigen::Vector3f> Colour(const cv::Mat& bgr, double u, double v) {
+  if (u < 0 || v < 0 || u > bgr.cols - 1 || v > bgr.rows - 1) return std::nullopt;
+  const int u0 = std::min(static_cast<int>(u), bgr.cols - 2);
+  const int v0 = std::min(static_cast<int>(v), bgr.rows - 2);
+  const float a = static_cast<float>(u - u0), b = static_cast<float>(v - v0);
+  Eigen::Vector3f rgb = Eigen::Vector3f::Zero();
+  const float w[4] = {(1 - a) * (1 - b), a * (1 - b), (1 - a) * b, a * b};
+  const cv::Vec3b* px[4] = {&bgr.at<cv::Vec3b>(v0, u0), &bgr.at<cv::Vec3b>(v0, u0 + 1),
+                            &bgr.at<cv::Vec3b>(v0 + 1, u0), &bgr.at<cv::Vec3b>(v0 + 1, u0 + 1)};
+  for (int i = 0; i < 4; ++i)
+    for (int ch = 0; ch < 3; ++ch) rgb[ch] += w[i] * (*px[i])[2 - ch];
+  return rgb / 255.0f;
+}
+
+}  // namespace
+
+device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
+                     const std::function<void(const device::StereoFrame&)>& on_frame) {
+  HGRASP_DEMAND(sweep.positions > 1 && sweep.end_count != sweep.start_count);
+  device::StereoFrame frame;
+  if (auto st = dev.laser->MoveTo(sweep.start_count, kSlewCountsPerS); st != device::Status::kOk) {
+    return st;
+  }
+  if (auto st = WaitForLaser(dev, &frame); st != device::Status::kOk) return st;
+  const double speed =
+      std::abs(sweep.end_count - sweep.start_count) / (sweep.positions * kFramePeriodS);
+  if (auto st = dev.laser->MoveTo(sweep.end_count, speed); st != device::Status::kOk) return st;
+  device::StripeLaserState s;
+  for (int i = 0; i < 4 * sweep.positions; ++i) {
+    if (auto st = dev.cameras->Grab(&frame); st != device::Status::kOk) return st;
+    on_frame(frame);
+    if (auto st = dev.laser->Read(&s); st != device::Status::kOk) return st;
+    if (!s.moving) break;
+  }
+  return device::Status::kOk;
+}
+
+Scanner::Scanner(robot::HeadKinematics head, robot::StereoIntrinsics cameras,
+                 robot::LaserCalibration laser, StripeFrameConfig config)
+    : head_(std::move(head)),
+      cameras_(std::move(cameras)),
+      laser_(std::move(laser)),
+      config_(config) {}
+
+const Rectification& Scanner::RectificationAt(double verge) {
+  auto& r = rectifications_[verge];
+  if (!r) {
+    const Pose3 X_CLCR = head_.X_HC(0, verge).inverse() * head_.X_HC(1, verge);
+    r = std::make_unique<Rectification>(MakeRectification(cameras_.left, cameras_.right, X_CLCR));
+  }
+  return *r;
+}
+
+LaserCoefficients Scanner::CoefficientsAt(std::int32_t count, double verge) {
+  const Rectification& rect = RectificationAt(verge);
+  const Pose3 X_HM = head_.X_HC(0, verge) * rect.X_CLM;
+  return CoefficientsFromPlane(laser_.PlaneH(count).TransformedBy(X_HM.inverse()), rect.b);
+}
+
+void Scanner::ProcessFrame(const device::StereoFrame& frame, const cv::Mat& ambient_left,
+                           RangeImage* range, int col, StripeFrameResult* result) {
+  const double verge = frame.head.verge;
+  const Rectification& rect = RectificationAt(verge);
+  auto& processor = processors_[verge];
+  if (!processor) processor = std::make_unique<StripeFrameProcessor>(&rect, config_);
+  processor->Process(frame.left, frame.right, CoefficientsAt(frame.laser_encoder_count, verge),
+                     result);
+  const Pose3 X_WCL = head_.X_WC(0, frame.head);
+  for (const StripePoint& p : result->points) {
+    RangeCell& cell = range->at(p.row, col);
+    cell.valid = true;
+    cell.p_C = rect.X_CLM * p.p_M;
+    cell.p_W = X_WCL * cell.p_C;
+    const auto uv = cameras_.left.Project(cell.p_C);
+    if (uv) {
+      if (const auto rgb = Colour(ambient_left, uv->x(), uv->y())) cell.rgb = *rgb;
+    }
+  }
+}
+
+ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
+  ScanResult out;
+  device::StereoFrame ambient;
+  dev.laser->SetLaser(false);
+  dev.cameras->Grab(&ambient);
+  out.ambient_left = ambient.left.clone();
+  std::vector<device::StereoFrame> frames;
+  dev.laser->SetLaser(true);
+  Sweep(dev, sweep, [&](const device::StereoFrame& f) { frames.push_back(f); });
+  dev.laser->SetLaser(false);
+  out.range = RangeImage(cameras_.left.height, static_cast<int>(frames.size()));
+  StripeFrameResult result;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    ProcessFrame(frames[i], out.ambient_left, &out.range, static_cast<int>(i), &result);
+    out.range.encoder_counts.push_back(frames[i].laser_encoder_count);
+    out.points += static_cast<int>(result.points.size());
+    out.rejected += result.rejected;
+  }
+  return out;
+}
+
+robot::LaserCalibration CalibrateLaser(device::RobotDevices& dev, const robot::HeadKinematics& head,
+                                       const robot::StereoIntrinsics& cameras,
+                                       const SweepConfig& sweep, StripeFrameConfig config,
+                                       LaserCalibrationReport* report) {
+  device::HeadState hs;
+  dev.head->Read(&hs);
+  const double verge = hs.q.verge;
+  const Pose3 X_CLCR = head.X_HC(0, verge).inverse() * head.X_HC(1, verge);
+  const Rectification rect = MakeRectification(cameras.left, cameras.right, X_CLCR);
+  const Pose3 X_HM = head.X_HC(0, verge) * rect.X_CLM;
+  StripeFrameProcessor processor(&rect, config);
+  std::vector<std::pair<std::int32_t, Plane>> planes_H;
+  std::vector<std::pair<std::int32_t, std::vector<Eigen::Vector3d>>> observations;
+  std::vector<CountedPoint> points_H;
+  int frames = 0;
+  dev.laser->SetLaser(true);
+  Sweep(dev, sweep, [&](const device::StereoFrame& f) {
+    ++frames;
+    processor.Rectify(f.left, f.right);
+    std::vector<std::vector<Eigen::Vector3d>> rows;
+    processor.CandidatePairs(3, &rows);
+    std::vector<Eigen::Vector3d> pairs;
+    const auto c = FitCoefficientsRobust(rows, rect.f, 0.5, &pairs);
+    if (!c) return;
+    planes_H.emplace_back(f.laser_encoder_count,
+                          PlaneFromCoefficients(*c, rect.b).TransformedBy(X_HM));
+    // The pairs this count's fit keeps, triangulated without the plane, for the refinement.
+    std::vector<double> r(pairs.size());
+    double sum2 = 0;
+    for (size_t i = 0; i < pairs.size(); ++i) {
+      r[i] = c->Residue(pairs[i].x(), pairs[i].y(), pairs[i].z(), rect.f);
+      sum2 += r[i] * r[i];
+    }
+    const double rms = std::sqrt(sum2 / pairs.size());
+    for (size_t i = 0; i < pairs.size(); i += 2) {  // every other row is plenty
+      if (std::abs(r[i]) > 2.5 * rms) continue;
+      points_H.push_back({f.laser_encoder_count,
+                          X_HM * rect.Triangulate(pairs[i].x(), pairs[i].y(), pairs[i].z())});
+    }
+    observations.emplace_back(f.laser_encoder_count, std::move(pairs));
+  });
+  dev.laser->SetLaser(false);
+  if (planes_H.size() < 3) {
+    throw std::runtime_error("laser calibration: only " + std::to_string(planes_H.size()) + " of " +
+                             std::to_string(frames) +
+                             " stripe positions fell on a non-planar target");
+  }
+  // Robustly: counts whose plane disagrees with a first model (a stripe off the target, a wrong
+  // pair of candidates) are dropped, then the model is refined on the points of the rest, twice,
+  // trimming points beyond 3 RMS.
+  // A plane is consistent when its normal lies as close to its neighbours' in the sweep as
+  // neighbours typically do (the sweep turns it smoothly).
+  auto angle = [&](size_t i, size_t j) {
+    return std::acos(std::min(1.0, std::abs(planes_H[i].second.n.dot(planes_H[j].second.n))));
+  };
+  std::vector<double> spread(planes_H.size());
+  for (size_t i = 0; i < planes_H.size(); ++i) {
+    std::vector<double> a;
+    for (int k = -2; k <= 2; ++k) {
+      const long j = static_cast<long>(i) + k;
+      if (k != 0 && j >= 0 && j < static_cast<long>(planes_H.size())) a.push_back(angle(i, j));
+    }
+    std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+    spread[i] = a[a.size() / 2];
+  }
+  std::vector<double> sorted = spread;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double typical = sorted[sorted.size() / 2];
+  std::vector<std::pair<std::int32_t, Plane>> consistent;
+  std::set<std::int32_t> kept_counts;
+  for (size_t i = 0; i < planes_H.size(); ++i) {
+    if (spread[i] < 3 * typical + DegToRad(0.2)) {
+      consistent.push_back(planes_H[i]);
+      kept_counts.insert(planes_H[i].first);
+    }
+  }
+  if (consistent.size() < 3) {
+    throw std::runtime_error(
+        "laser calibration: the stripe planes do not turn smoothly with the "
+        "encoder; is the head still and the target non-planar?");
+  }
+  robot::LaserCalibration cal = FitRotatingPlane(consistent);
+  std::erase_if(points_H, [&](const CountedPoint& p) { return !kept_counts.count(p.count); });
+  for (int pass = 0; pass < 3; ++pass) {
+    double rms = 0;
+    cal = RefineOnPoints(cal, points_H, &rms);
+    std::vector<CountedPoint> kept;
+    for (const CountedPoint& p : points_H) {
+      if (std::abs(cal.PlaneH(p.count).SignedDistance(p.p_H)) < 3 * rms) kept.push_back(p);
+    }
+    points_H.swap(kept);
+  }
+  cal.counts_used = static_cast<int>(consistent.size());
+  // Residues of the model over every pair used.
+  double sum2 = 0;
+  long n = 0;
+  for (const auto& [count, pairs] : observations) {
+    const LaserCoefficients c =
+        CoefficientsFromPlane(cal.PlaneH(count).TransformedBy(X_HM.inverse()), rect.b);
+    for (const auto& p : pairs) {
+      const double r = c.Residue(p.x(), p.y(), p.z(), rect.f);
+      if (std::abs(r) < 1.0) sum2 += r * r, ++n;  // the strays eq. 6 also dropped
+    }
+  }
+  cal.rms_residual_px = n > 0 ? std::sqrt(sum2 / n) : 0.0;
+  if (report != nullptr) *report = {frames, cal.counts_used, cal.rms_residual_px};
+  return cal;
+}
+
+}  // namespace hgrasp::scan
