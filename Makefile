@@ -1,7 +1,7 @@
 # hgrasp: `make run` and `make test` take a fresh Debian 12 machine from clone to result.
 # deps   installs the Debian packages that are missing (idempotent; sudo only when not root)
 # build  configures and builds (Release) in build/
-# run    builds, then runs the default scenario headless into out/default/
+# run    builds, then scans the default scenario headless into out/default/
 # test   builds, then runs every test (ctest)
 # bench  builds, then runs the benchmarks in tests/bench/
 
@@ -37,8 +37,8 @@ build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
 run: build
-	./$(BUILD)/hgrasp render $(SCENARIO) --out $(OUT) --encoder 530 -800
-	@echo "make run: images in $(OUT)/ (stereo_pair.png: left and right with the stripe)"
+	./$(BUILD)/hgrasp scan $(SCENARIO) --out $(OUT)
+	@echo "make run: $(OUT)/range.png (colour and range), range.ply, report.json"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)

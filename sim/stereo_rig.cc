@@ -193,6 +193,7 @@ StereoImages StereoRig::Expose(std::uint64_t frame_key) {
     }
     radiance.convertTo(out.image[cam], CV_8UC3);  // rounds and saturates at 0 and 255
   }
+  last_crossings_ = out.crossings;
   return out;
 }
 

@@ -47,6 +47,11 @@ class StereoRig {
   /// from the scenario seed and `frame_key`, saturated to 0-255.
   StereoImages Expose(std::uint64_t frame_key);
 
+  /// The stripe crossings drawn in the last exposure, per camera (ground truth for tests).
+  const std::array<std::vector<StripeCrossing>, 2>& last_crossings() const {
+    return last_crossings_;
+  }
+
   void set_cache_enabled(bool on) { cache_enabled_ = on; }
   /// Full scene renders so far (each one renders both colour/depth and labels).
   int full_renders() const { return full_renders_; }
@@ -66,6 +71,7 @@ class StereoRig {
   std::array<CameraView, 2> views_;
   std::array<bool, 2> valid_ = {false, false};
   std::vector<double> key_;
+  std::array<std::vector<StripeCrossing>, 2> last_crossings_;
   bool cache_enabled_ = true;
   int full_renders_ = 0;
 };

@@ -15,8 +15,12 @@ std::optional<LaserCoefficients> FitCoefficients(const std::vector<Eigen::Vector
   LaserCoefficients c;
   double rms = 0;
   constexpr int kPasses = 4;
+  bool fitted = false;
   for (int pass = 0; pass < kPasses; ++pass) {
-    if (kept.size() < 20) return std::nullopt;
+    if (kept.size() < 20) {
+      if (!fitted) return std::nullopt;
+      break;  // trimming left too few: keep the previous pass's fit
+    }
     // Rows [xR, y, f] (alpha, beta, gamma) = -xL; columns scaled to unit size for conditioning.
     Eigen::MatrixXd A(kept.size(), 3);
     Eigen::VectorXd rhs(kept.size());
@@ -32,6 +36,7 @@ std::optional<LaserCoefficients> FitCoefficients(const std::vector<Eigen::Vector
     if (s[2] < 1e-4 * s[0]) return std::nullopt;
     const Eigen::Vector3d x = svd.solve(rhs).cwiseQuotient(scale);
     c = {x[0], x[1], x[2]};
+    fitted = true;
     const Eigen::VectorXd r = A * x - rhs;
     rms = std::sqrt(r.squaredNorm() / r.size());
     if (pass == kPasses - 1) break;

@@ -69,7 +69,10 @@ Scanner::Scanner(robot::HeadKinematics head, robot::StereoIntrinsics cameras,
       laser_(std::move(laser)),
       config_(config) {}
 
+double Scanner::VergeKey(double verge) { return std::round(verge / kVergeStepRad) * kVergeStepRad; }
+
 const Rectification& Scanner::RectificationAt(double verge) {
+  verge = VergeKey(verge);
   auto& r = rectifications_[verge];
   if (!r) {
     const Pose3 X_CLCR = head_.X_HC(0, verge).inverse() * head_.X_HC(1, verge);
@@ -79,6 +82,7 @@ const Rectification& Scanner::RectificationAt(double verge) {
 }
 
 LaserCoefficients Scanner::CoefficientsAt(std::int32_t count, double verge) {
+  verge = VergeKey(verge);
   const Rectification& rect = RectificationAt(verge);
   const Pose3 X_HM = head_.X_HC(0, verge) * rect.X_CLM;
   return CoefficientsFromPlane(laser_.PlaneH(count).TransformedBy(X_HM.inverse()), rect.b);
@@ -86,7 +90,7 @@ LaserCoefficients Scanner::CoefficientsAt(std::int32_t count, double verge) {
 
 void Scanner::ProcessFrame(const device::StereoFrame& frame, const cv::Mat& ambient_left,
                            RangeImage* range, int col, StripeFrameResult* result) {
-  const double verge = frame.head.verge;
+  const double verge = VergeKey(frame.head.verge);
   const Rectification& rect = RectificationAt(verge);
   auto& processor = processors_[verge];
   if (!processor) processor = std::make_unique<StripeFrameProcessor>(&rect, config_);

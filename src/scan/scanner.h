@@ -50,6 +50,12 @@ class Scanner {
   void ProcessFrame(const device::StereoFrame& frame, const cv::Mat& ambient_left,
                     RangeImage* range, int col, StripeFrameResult* result);
 
+  /// Verge readings within this step (rad) share one rectification: 1e-5 rad moves a point
+  /// 6 um at 0.6 m, far below the Biclops encoder's own step, and servo jitter never builds a
+  /// new one.
+  static constexpr double kVergeStepRad = 1e-5;
+  static double VergeKey(double verge);
+
   /// The rectification at a verge angle (rad), computed once per angle.
   const Rectification& RectificationAt(double verge);
   /// The light plane's coefficients at an encoder count, for the cameras at a verge angle.

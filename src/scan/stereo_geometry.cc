@@ -10,7 +10,7 @@ namespace hgrasp::scan {
 LaserCoefficients CoefficientsFromPlane(const Plane& p, double b) {
   const double A = p.n.x(), B = p.n.y(), C = p.n.z(), D = p.d;
   const double s = A * b + D;
-  HGRASP_DEMAND_MSG(std::abs(s) > 1e-12, "light plane edge-on to the left camera");
+  HGRASP_DEMAND_MSG(std::abs(s) > 1e-12, "light plane through the right camera centre");
   return {(A * b - D) / s, 2 * B * b / s, 2 * C * b / s};
 }
 

@@ -29,8 +29,8 @@ struct LaserCoefficients {
   }
 };
 
-/// Coefficients of plane_M for half-baseline b (m). The plane must not pass through the left
-/// camera centre's mirror condition A b + D = 0 (then the stripe is edge-on in one camera).
+/// Coefficients of plane_M for half-baseline b (m). The plane must not pass through the right
+/// camera's centre (+b, 0, 0), A b + D = 0: the stripe would be edge-on in that camera.
 LaserCoefficients CoefficientsFromPlane(const Plane& plane_M, double b);
 /// The plane (unit normal) the coefficients describe, for half-baseline b.
 Plane PlaneFromCoefficients(const LaserCoefficients& c, double b);

@@ -11,24 +11,28 @@ void DetectStripeCandidates(const std::uint8_t* row, int width, const StripeDete
   const int k = cfg.half_width;
   for (int x = k; x < width - k; ++x) {
     const int v = row[x];
-    const int left = row[x - k], right = row[x + k];
-    if (v - left < cfg.min_contrast || v - right < cfg.min_contrast) continue;
-    // Local maximum; on a plateau, only its first pixel.
+    // Local maximum; on a plateau (a saturated run), only its first pixel.
     if (row[x - 1] >= v || row[x + 1] > v) continue;
+    // A saturated run is one candidate: its background lies half_width beyond its far end.
+    int end = x;
+    if (v >= cfg.saturation) {
+      while (end + 1 < width && row[end + 1] >= cfg.saturation) ++end;
+    }
+    if (end + k >= width) break;
+    const int left = row[x - k], right = row[end + k];
+    if (v - left < cfg.min_contrast || v - right < cfg.min_contrast) continue;
     const double background = 0.5 * (left + right);
     if (std::abs(left - right) > cfg.max_background_step * (v - background)) continue;
     double centre = x;
     if (v >= cfg.saturation) {
-      // Clipped: the centre of the saturated run, weighted by what lies above the background.
-      int end = x;
-      while (end + 1 < width - 1 && row[end + 1] >= cfg.saturation) ++end;
+      // Clipped: the centroid of what stands above the background around the run.
       double sw = 0, sx = 0;
-      for (int i = std::max(0, x - k); i <= std::min(width - 1, end + k); ++i) {
+      for (int i = x - k + 1; i <= end + k - 1; ++i) {
         const double w = row[i] - background;
         if (w > 0) sw += w, sx += w * i;
       }
       centre = sx / sw;
-      x = end;  // the run is one candidate
+      x = end;
     } else {
       const double a = row[x - 1] - background, c = row[x + 1] - background;
       const double m = v - background;

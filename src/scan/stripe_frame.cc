@@ -1,5 +1,6 @@
 #include "scan/stripe_frame.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -42,34 +43,81 @@ Eigen::Vector3d IntersectLeftRay(double xL, double y, const Plane& plane_M,
 StripeFrameProcessor::StripeFrameProcessor(const Rectification* rect, StripeFrameConfig config)
     : rect_(rect), config_(config) {}
 
+void StripeFrameProcessor::RectifyBand(int camera, const cv::Mat& image, std::pair<int, int> band) {
+  const Rectification& R = *rect_;
+  cv::extractChannel(image, red_[camera], 2);  // BGR: the laser is red
+  rectified_[camera].create(R.height, R.width, CV_8U);
+  rectified_[camera].setTo(0);  // outside the band: nothing searched, nothing shown
+  band_[camera] = band;
+  if (band.second < band.first) return;
+  const cv::Rect roi(band.first, 0, band.second - band.first + 1, R.height);
+  cv::Mat out = rectified_[camera](roi);
+  cv::remap(red_[camera], out, R.map1[camera](roi), R.map2[camera](roi), cv::INTER_LINEAR,
+            cv::BORDER_CONSTANT, cv::Scalar(0));
+}
+
 void StripeFrameProcessor::Rectify(const cv::Mat& left, const cv::Mat& right) {
-  const cv::Mat* images[2] = {&left, &right};
-  for (int cam = 0; cam < 2; ++cam) {
-    cv::extractChannel(*images[cam], red_[cam], 2);  // BGR: the laser is red
-    cv::remap(red_[cam], rectified_[cam], rect_->map1[cam], rect_->map2[cam], cv::INTER_LINEAR,
-              cv::BORDER_CONSTANT, cv::Scalar(0));
+  RectifyBand(0, left, {0, rect_->width - 1});
+  RectifyBand(1, right, {0, rect_->width - 1});
+}
+
+std::pair<int, int> StripeFrameProcessor::StripeBand(int camera, const LaserCoefficients& c) const {
+  const Rectification& R = *rect_;
+  const Plane p = PlaneFromCoefficients(c, R.b);
+  const double A = p.n.x(), B = p.n.y(), C = p.n.z(), D = p.d;
+  if (std::abs(A) < 1e-3) return {0, R.width - 1};  // a sheet facing the cameras: anywhere
+  // On the plane at depth Z, row y: xL = (-B y - C f + f (A b - D) / Z) / A and
+  // xR = (-B y - C f - f (A b + D) / Z) / A; linear in y and 1/Z, so the extremes are at the
+  // corners of (rows) x (depth range).
+  const double k = camera == 0 ? A * R.b - D : -(A * R.b + D);
+  double lo = 1e9, hi = -1e9;
+  for (const double y : {-R.cy, R.height - 1 - R.cy}) {
+    for (const double Z : {config_.min_range_m, config_.max_range_m}) {
+      const double x = (-B * y - C * R.f + R.f * k / Z) / A;
+      lo = std::min(lo, x), hi = std::max(hi, x);
+    }
   }
+  const int margin = config_.detector.half_width + 2;
+  const int first = std::max(0, static_cast<int>(std::floor(lo + R.cx)) - margin);
+  const int last = std::min(R.width - 1, static_cast<int>(std::ceil(hi + R.cx)) + margin);
+  return {first, last};
 }
 
 void StripeFrameProcessor::Process(const cv::Mat& left, const cv::Mat& right,
                                    const LaserCoefficients& c, StripeFrameResult* out) {
   out->points.clear();
   out->rejected = 0;
-  Rectify(left, right);
+  // Only the columns where the plane can put a stripe are rectified and searched.
+  RectifyBand(0, left, StripeBand(0, c));
+  if (config_.stereo) RectifyBand(1, right, StripeBand(1, c));
   const Rectification& R = *rect_;
+  const auto detect = [&](int cam, int row) {
+    const auto [first, last] = band_[cam];
+    candidates_[cam].clear();
+    if (last < first) return;
+    DetectStripeCandidates(rectified_[cam].ptr<std::uint8_t>(row) + first, last - first + 1,
+                           config_.detector, &candidates_[cam]);
+    for (StripeCandidate& k : candidates_[cam]) k.x += first;
+  };
   const Plane plane_M = config_.stereo ? Plane{} : PlaneFromCoefficients(c, R.b);
   for (int row = 0; row < R.height; ++row) {
     const double y = row - R.cy;
-    DetectStripeCandidates(rectified_[0].ptr<std::uint8_t>(row), R.width, config_.detector,
-                           &candidates_[0]);
+    detect(0, row);
     if (candidates_[0].empty()) continue;
+    const auto in_range = [&](const Eigen::Vector3d& p_M) {
+      return p_M.z() >= config_.min_range_m && p_M.norm() <= config_.max_range_m;
+    };
     if (!config_.stereo) {
       const double xL = candidates_[0].front().x - R.cx;
-      out->points.push_back({row, xL, 0.0, 0.0, IntersectLeftRay(xL, y, plane_M, R)});
+      const Eigen::Vector3d p_M = IntersectLeftRay(xL, y, plane_M, R);
+      if (in_range(p_M)) {
+        out->points.push_back({row, xL, 0.0, 0.0, p_M});
+      } else {
+        ++out->rejected;
+      }
       continue;
     }
-    DetectStripeCandidates(rectified_[1].ptr<std::uint8_t>(row), R.width, config_.detector,
-                           &candidates_[1]);
+    detect(1, row);
     if (candidates_[1].empty()) continue;
     const auto m =
         MatchRow(candidates_[0], candidates_[1], R.cx, y, R.f, c, config_.max_residue_px);
@@ -79,7 +127,7 @@ void StripeFrameProcessor::Process(const cv::Mat& left, const cv::Mat& right,
     }
     const double xL = candidates_[0][m->left].x - R.cx, xR = candidates_[1][m->right].x - R.cx;
     const Eigen::Vector3d p_M = ReconstructOnPlane(xL, xR, y, c, R);
-    if (p_M.z() < config_.min_range_m || p_M.norm() > config_.max_range_m) {
+    if (!in_range(p_M)) {
       ++out->rejected;
       continue;
     }

@@ -35,7 +35,9 @@ struct StripePoint {
 
 struct StripeFrameResult {
   std::vector<StripePoint> points;
-  int rejected = 0;  ///< rows with candidates in both images but no pair within max_residue_px
+  /// Rows with candidates whose point was refused: no pair within max_residue_px (stereo), or
+  /// a point outside [min_range_m, max_range_m].
+  int rejected = 0;
 };
 
 /// The best pair of a row: candidate indices and residue, or nullopt when none is within
@@ -67,21 +69,30 @@ class StripeFrameProcessor {
   void Process(const cv::Mat& left, const cv::Mat& right, const LaserCoefficients& c,
                StripeFrameResult* out);
 
-  /// The rectified red channel of the last processed frame (for pictures and tests).
+  /// The rectified red channel of the last processed frame (for pictures and tests): after
+  /// Process, only the stripe bands are filled (0 elsewhere); after Rectify, all of it.
   const cv::Mat& rectified_red(int camera) const { return rectified_[camera]; }
 
   /// Every row's candidate pairs (up to `per_image` strongest in each image), as (xL, xR, y),
   /// one vector per row: what the robust self-calibration chooses from. Uses the images of the
-  /// last Process or Rectify call.
+  /// last Rectify call (whole images: no light plane is known yet).
   void CandidatePairs(int per_image, std::vector<std::vector<Eigen::Vector3d>>* rows);
-  /// Rectifies the red channels only.
+  /// Rectifies the red channels only (whole images).
   void Rectify(const cv::Mat& left, const cv::Mat& right);
+
+  /// Columns [first, last] of camera `camera`'s rectified image where the light plane with
+  /// coefficients `c` can show a point between min_range_m and max_range_m (plus the
+  /// detector's reach): only there can a valid stripe lie.
+  std::pair<int, int> StripeBand(int camera, const LaserCoefficients& c) const;
 
   const StripeFrameConfig& config() const { return config_; }
 
  private:
+  void RectifyBand(int camera, const cv::Mat& image, std::pair<int, int> band);
+
   const Rectification* rect_;
   StripeFrameConfig config_;
+  std::pair<int, int> band_[2];
   cv::Mat red_[2], rectified_[2];
   std::vector<StripeCandidate> candidates_[2];
 };

@@ -1,0 +1,123 @@
+// `hgrasp scan` and `hgrasp calibrate laser` as a user runs them: bad calibration files and usage
+// errors exit 2 with a message naming the file, the field and the value, before any simulation
+// runs and without writing output.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace {
+
+struct ScanCliResult {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+ScanCliResult RunHgraspScanCli(const std::string& args) {
+  ScanCliResult r;
+  const std::string cmd = std::string(HGRASP_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return r;
+  std::array<char, 4096> buf;
+  while (fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
+  const int raw = pclose(pipe);
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return r;
+}
+
+std::string Calibration(const std::string& name) {
+  return std::string(HGRASP_TEST_DATA) + "/calibration/" + name;
+}
+
+std::string DefaultScenario() { return std::string(HGRASP_ROOT_DIR) + "/scenarios/default.yaml"; }
+
+std::filesystem::path FreshOutDir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("hgrasp_cli_scan_" + name);
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+struct BadFileCase {
+  const char* option;  // --laser or --cameras
+  const char* file;
+  const char* field;
+  const char* value;
+};
+
+class ScanBadCalibrationTest : public ::testing::TestWithParam<BadFileCase> {};
+
+TEST_P(ScanBadCalibrationTest, ExitsTwoNamingFileFieldAndValue) {
+  const BadFileCase& c = GetParam();
+  const auto out_dir = FreshOutDir(c.file);
+  const ScanCliResult r =
+      RunHgraspScanCli("scan " + DefaultScenario() + " --out " + out_dir.string() + " " + c.option +
+                       " " + Calibration(c.file));
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find(Calibration(c.file)), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(c.field), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(std::string("got '") + c.value + "'"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out_dir)) << "output written for a bad calibration";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cli, ScanBadCalibrationTest,
+    ::testing::Values(
+        BadFileCase{"--laser", "bad_laser_wrong_type.yaml", "offset_m", "small"},
+        BadFileCase{"--laser", "bad_laser_axis_not_unit.yaml", "axis_H", "[0, 0, 1.001]"},
+        BadFileCase{"--laser", "bad_laser_frame.yaml", "frame", "camera_left_optical"},
+        BadFileCase{"--cameras", "bad_cameras_wrong_type.yaml", "left.cx", "centre"},
+        BadFileCase{"--cameras", "bad_cameras_negative_width.yaml", "right.width", "-320"}),
+    [](const ::testing::TestParamInfo<BadFileCase>& info) {
+      const std::string name = info.param.file;
+      return name.substr(0, name.find('.'));
+    });
+
+TEST(CliScanTest, MissingLaserFileExitsTwoNamingIt) {
+  const auto out_dir = FreshOutDir("missing_laser");
+  const std::string missing = "/nonexistent_hgrasp_laser.yaml";
+  const ScanCliResult r = RunHgraspScanCli("scan " + DefaultScenario() + " --out " +
+                                           out_dir.string() + " --laser " + missing);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find(missing), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out_dir));
+}
+
+TEST(CliScanTest, MissingCamerasFileExitsTwoNamingIt) {
+  const auto out_dir = FreshOutDir("missing_cameras");
+  const std::string missing = "/nonexistent_hgrasp_cameras.yaml";
+  const ScanCliResult r = RunHgraspScanCli("scan " + DefaultScenario() + " --out " +
+                                           out_dir.string() + " --cameras " + missing);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find(missing), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out_dir));
+}
+
+TEST(CliScanTest, CalibrateLaserWithBadCamerasExitsTwoAndWritesNothing) {
+  const auto out_dir = FreshOutDir("calibrate_bad_cameras");
+  const auto out_file = out_dir / "laser.yaml";
+  const ScanCliResult r =
+      RunHgraspScanCli("calibrate laser " + DefaultScenario() + " --out " + out_file.string() +
+                       " --cameras " + Calibration("bad_cameras_zero_fx.yaml"));
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("bad_cameras_zero_fx.yaml"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("left.fx"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out_file));
+}
+
+TEST(CliScanTest, UsageErrorsExitTwo) {
+  EXPECT_EQ(RunHgraspScanCli("calibrate laser " + DefaultScenario()).status, 2);  // no --out
+  EXPECT_EQ(RunHgraspScanCli("calibrate").status, 2);                             // no subcommand
+  EXPECT_EQ(RunHgraspScanCli("calibrate laser --out /tmp/x.yaml").status, 2);     // no scenario
+  EXPECT_EQ(RunHgraspScanCli("scan " + DefaultScenario()).status, 2);             // no --out
+  EXPECT_EQ(RunHgraspScanCli("scan --out /tmp/hgrasp_cli_scan_never").status, 2);
+  EXPECT_EQ(
+      RunHgraspScanCli("scan " + DefaultScenario() + " --out /tmp/hgrasp_cli_scan_never --laser")
+          .status,
+      2);  // option without its value
+}
+
+}  // namespace
