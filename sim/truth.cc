@@ -93,4 +93,26 @@ double DistanceToTrueSurface(const World& world, const Eigen::Vector3d& p_W) {
   return d;
 }
 
+LaserPlaneError CompareLaserPlanes(const StereoRig& rig,
+                                   const std::function<Plane(std::int32_t)>& planes_W,
+                                   std::int32_t lo, std::int32_t hi) {
+  const Eigen::Vector3d probes[] = {{0.30, 0.0, 0.05},
+                                    {0.20, -0.15, 0.0},
+                                    {0.20, 0.15, 0.0},
+                                    {0.40, -0.15, 0.15},
+                                    {0.40, 0.15, 0.15}};
+  LaserPlaneError e;
+  for (std::int32_t count = lo; count <= hi; count += 10) {
+    const Plane truth = rig.LaserPlaneAt(count * kLaserRadPerCount);
+    const Plane mine = planes_W(count);
+    e.worst_deg =
+        std::max(e.worst_deg, RadToDeg(std::acos(std::min(1.0, std::abs(truth.n.dot(mine.n))))));
+    for (const Eigen::Vector3d& q : probes) {
+      const Eigen::Vector3d on_truth = q - truth.SignedDistance(q) * truth.n;
+      e.worst_mm = std::max(e.worst_mm, 1e3 * std::abs(mine.SignedDistance(on_truth)));
+    }
+  }
+  return e;
+}
+
 }  // namespace hgrasp::sim

@@ -2,6 +2,7 @@
 /// @file Simulator ground truth for reports and tests (never read by the pipeline).
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -31,5 +32,18 @@ double DistanceToTrueSurface(const World& world, const Eigen::Vector3d& p_W);
 /// centred at X_WO; inside the box, the distance to the nearest face.
 double DistanceToBoxSurface(const Pose3& X_WO, const Eigen::Vector3d& size_O,
                             const Eigen::Vector3d& p_W);
+
+/// How far a calibrated light plane lies from the simulator's, over encoder counts.
+struct LaserPlaneError {
+  double worst_deg = 0;  ///< largest angle between the normals
+  double worst_mm = 0;   ///< largest distance, at points of the true plane near the workspace
+};
+
+/// Compares `planes_W(count)` (a calibration's plane in W) with the true plane for every 10th
+/// count in [lo, hi]. The distance is measured at the true plane's points nearest to five
+/// workspace points (the middle and the corners of DESIGN.md's workspace, 0-0.15 m high).
+LaserPlaneError CompareLaserPlanes(const StereoRig& rig,
+                                   const std::function<Plane(std::int32_t)>& planes_W,
+                                   std::int32_t lo, std::int32_t hi);
 
 }  // namespace hgrasp::sim

@@ -32,14 +32,6 @@ robot::HeadKinematics Head() {
   return robot::HeadKinematics::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
 }
 
-// Points of the workspace volume where a calibrated plane is compared with the true one: the
-// true plane's points nearest to these.
-const Eigen::Vector3d kProbePoints_W[] = {{0.30, 0.0, 0.05},
-                                          {0.20, -0.15, 0.0},
-                                          {0.20, 0.15, 0.0},
-                                          {0.40, -0.15, 0.15},
-                                          {0.40, 0.15, 0.15}};
-
 }  // namespace
 
 int CalibrateLaser(const CalibrateLaserOptions& o) {
@@ -57,27 +49,18 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   device::HeadState hs;
   dev.head->Read(&hs);
   const Pose3 X_WH = head.X_WH(hs.q);
-  double worst_deg = 0, worst_mm = 0;
   const std::int32_t lo = std::min(sweep.start_count, sweep.end_count);
   const std::int32_t hi = std::max(sweep.start_count, sweep.end_count);
-  for (std::int32_t count = lo; count <= hi; count += 10) {
-    const Plane truth = robot.rig().LaserPlaneAt(count * sim::kLaserRadPerCount);
-    const Plane mine = cal.PlaneH(count).TransformedBy(X_WH);
-    worst_deg =
-        std::max(worst_deg, RadToDeg(std::acos(std::min(1.0, std::abs(truth.n.dot(mine.n))))));
-    for (const Eigen::Vector3d& q : kProbePoints_W) {
-      const Eigen::Vector3d on_truth = q - truth.SignedDistance(q) * truth.n;
-      worst_mm = std::max(worst_mm, 1e3 * std::abs(mine.SignedDistance(on_truth)));
-    }
-  }
+  const sim::LaserPlaneError error = sim::CompareLaserPlanes(
+      robot.rig(), [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, lo, hi);
   fs::path out(o.out_file);
   if (out.has_parent_path()) fs::create_directories(out.parent_path());
   robot::SaveLaserCalibration(cal, o.out_file);
   spdlog::info(
       "calibrate laser: {} of {} stripe positions used, eq. 5 residue RMS {:.3f} px; against the "
       "simulator's planes over counts {}..{}: worst {:.4f} deg, {:.3f} mm; wrote {} ({:.1f} s)",
-      report.counts_used, report.frames, report.rms_residue_px, lo, hi, worst_deg, worst_mm,
-      o.out_file, Seconds(t0));
+      report.counts_used, report.frames, report.rms_residue_px, lo, hi, error.worst_deg,
+      error.worst_mm, o.out_file, Seconds(t0));
   return 0;
 }
 

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/yaml_util.h"
 
 namespace hgrasp::robot {
 namespace {
@@ -27,80 +28,15 @@ constexpr char kFrameH[] = "camera_bracket";
 // Tolerance on the unit length of axis_H and normal0_H.
 constexpr double kUnitTolerance = 1e-6;
 
-// ---------------------------------------------------------------------------------------------
-// Scalars, strictly: a number is a plain (unquoted) decimal scalar, finite; no YAML 1.1 octal or
-// hexadecimal, no .inf or .nan.
-
-bool IsQuoted(const YAML::Node& n) { return n.Tag() == "!"; }
-
-std::optional<double> ParseNumber(const YAML::Node& n) {
-  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
-  std::string_view s = n.Scalar();
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  if (s.empty() || s.front() == '+') return std::nullopt;
-  double v = 0.0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
-std::optional<long long> ParseInteger(const YAML::Node& n) {
-  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
-  std::string_view s = n.Scalar();
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  if (s.empty() || s.front() == '+') return std::nullopt;
-  long long v = 0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
-  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
-  return v;
-}
-
-// A node as the user wrote it, for error messages: a scalar verbatim, a collection in flow style;
-// null or missing as "" (InputError says "missing or empty").
-void RenderTo(const YAML::Node& n, bool top, std::string* out) {
-  if (!n.IsDefined() || n.IsNull()) return;
-  if (n.IsScalar()) {
-    *out += !top && IsQuoted(n) ? "\"" + n.Scalar() + "\"" : n.Scalar();
-  } else if (n.IsSequence()) {
-    *out += "[";
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      if (i > 0) *out += ", ";
-      RenderTo(n[i], false, out);
-    }
-    *out += "]";
-  } else if (n.IsMap()) {
-    *out += "{";
-    bool first = true;
-    for (const auto& kv : n) {
-      if (!first) *out += ", ";
-      first = false;
-      RenderTo(kv.first, false, out);
-      *out += ": ";
-      RenderTo(kv.second, false, out);
-    }
-    *out += "}";
-  }
-}
-
-std::string Render(const YAML::Node& n) {
-  std::string text;
-  RenderTo(n, true, &text);
-  constexpr std::size_t kMaxChars = 100;
-  if (text.size() > kMaxChars) text = text.substr(0, kMaxChars - 3) + "...";
-  return text;
-}
-
-std::string Join(const std::string& path, std::string_view key) {
-  return path.empty() ? std::string(key) : path + "." + std::string(key);
-}
-
-using Keys = std::vector<std::string_view>;
-
-std::string OneOf(const Keys& names) {
-  std::string s = "one of: ";
-  for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + std::string(names[i]);
-  return s;
-}
+// Strict scalars and message helpers: common/yaml_util.h.
+using yaml::IsQuoted;
+using yaml::Join;
+using yaml::Keys;
+using yaml::OneOf;
+using yaml::ParseInteger;
+using yaml::ParseNumber;
+using yaml::QuoteHint;
+using yaml::Render;
 
 // %.17g: enough significant digits for any double to read back exactly.
 std::string Exact(double v) {
@@ -222,17 +158,6 @@ class Reader {
   std::string Where(const YAML::Mark& mark) const {
     if (mark.line < 0) return path_;
     return path_ + ":" + std::to_string(mark.line + 1);
-  }
-
-  // Said after "expected ..." when a number was written in quotes.
-  static std::string QuoteHint(const YAML::Node& n) {
-    bool quoted = n.IsScalar() && IsQuoted(n);
-    if (n.IsSequence()) {
-      for (std::size_t i = 0; i < n.size(); ++i) {
-        quoted = quoted || (n[i].IsScalar() && IsQuoted(n[i]));
-      }
-    }
-    return quoted ? " (numbers go without quotes)" : "";
   }
 
   std::string path_;

@@ -10,24 +10,12 @@
 #include <filesystem>
 #include <string>
 
+#include "tests/app/cli_util.h"
+
 namespace {
 
-struct ScanCliResult {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
-
-ScanCliResult RunHgraspScanCli(const std::string& args) {
-  ScanCliResult r;
-  const std::string cmd = std::string(HGRASP_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
-  const int raw = pclose(pipe);
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
-}
+using hgrasp::testing::RunHgrasp;
+using ScanCliResult = hgrasp::testing::CliResult;
 
 std::string Calibration(const std::string& name) {
   return std::string(HGRASP_TEST_DATA) + "/calibration/" + name;
@@ -53,9 +41,8 @@ class ScanBadCalibrationTest : public ::testing::TestWithParam<BadFileCase> {};
 TEST_P(ScanBadCalibrationTest, ExitsTwoNamingFileFieldAndValue) {
   const BadFileCase& c = GetParam();
   const auto out_dir = FreshOutDir(c.file);
-  const ScanCliResult r =
-      RunHgraspScanCli("scan " + DefaultScenario() + " --out " + out_dir.string() + " " + c.option +
-                       " " + Calibration(c.file));
+  const ScanCliResult r = RunHgrasp("scan " + DefaultScenario() + " --out " + out_dir.string() +
+                                    " " + c.option + " " + Calibration(c.file));
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find(Calibration(c.file)), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(c.field), std::string::npos) << r.output;
@@ -79,8 +66,8 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(CliScanTest, MissingLaserFileExitsTwoNamingIt) {
   const auto out_dir = FreshOutDir("missing_laser");
   const std::string missing = "/nonexistent_hgrasp_laser.yaml";
-  const ScanCliResult r = RunHgraspScanCli("scan " + DefaultScenario() + " --out " +
-                                           out_dir.string() + " --laser " + missing);
+  const ScanCliResult r =
+      RunHgrasp("scan " + DefaultScenario() + " --out " + out_dir.string() + " --laser " + missing);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find(missing), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(out_dir));
@@ -89,8 +76,8 @@ TEST(CliScanTest, MissingLaserFileExitsTwoNamingIt) {
 TEST(CliScanTest, MissingCamerasFileExitsTwoNamingIt) {
   const auto out_dir = FreshOutDir("missing_cameras");
   const std::string missing = "/nonexistent_hgrasp_cameras.yaml";
-  const ScanCliResult r = RunHgraspScanCli("scan " + DefaultScenario() + " --out " +
-                                           out_dir.string() + " --cameras " + missing);
+  const ScanCliResult r = RunHgrasp("scan " + DefaultScenario() + " --out " + out_dir.string() +
+                                    " --cameras " + missing);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find(missing), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(out_dir));
@@ -100,8 +87,8 @@ TEST(CliScanTest, CalibrateLaserWithBadCamerasExitsTwoAndWritesNothing) {
   const auto out_dir = FreshOutDir("calibrate_bad_cameras");
   const auto out_file = out_dir / "laser.yaml";
   const ScanCliResult r =
-      RunHgraspScanCli("calibrate laser " + DefaultScenario() + " --out " + out_file.string() +
-                       " --cameras " + Calibration("bad_cameras_zero_fx.yaml"));
+      RunHgrasp("calibrate laser " + DefaultScenario() + " --out " + out_file.string() +
+                " --cameras " + Calibration("bad_cameras_zero_fx.yaml"));
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("bad_cameras_zero_fx.yaml"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("left.fx"), std::string::npos) << r.output;
@@ -109,14 +96,13 @@ TEST(CliScanTest, CalibrateLaserWithBadCamerasExitsTwoAndWritesNothing) {
 }
 
 TEST(CliScanTest, UsageErrorsExitTwo) {
-  EXPECT_EQ(RunHgraspScanCli("calibrate laser " + DefaultScenario()).status, 2);  // no --out
-  EXPECT_EQ(RunHgraspScanCli("calibrate").status, 2);                             // no subcommand
-  EXPECT_EQ(RunHgraspScanCli("calibrate laser --out /tmp/x.yaml").status, 2);     // no scenario
-  EXPECT_EQ(RunHgraspScanCli("scan " + DefaultScenario()).status, 2);             // no --out
-  EXPECT_EQ(RunHgraspScanCli("scan --out /tmp/hgrasp_cli_scan_never").status, 2);
+  EXPECT_EQ(RunHgrasp("calibrate laser " + DefaultScenario()).status, 2);  // no --out
+  EXPECT_EQ(RunHgrasp("calibrate").status, 2);                             // no subcommand
+  EXPECT_EQ(RunHgrasp("calibrate laser --out /tmp/x.yaml").status, 2);     // no scenario
+  EXPECT_EQ(RunHgrasp("scan " + DefaultScenario()).status, 2);             // no --out
+  EXPECT_EQ(RunHgrasp("scan --out /tmp/hgrasp_cli_scan_never").status, 2);
   EXPECT_EQ(
-      RunHgraspScanCli("scan " + DefaultScenario() + " --out /tmp/hgrasp_cli_scan_never --laser")
-          .status,
+      RunHgrasp("scan " + DefaultScenario() + " --out /tmp/hgrasp_cli_scan_never --laser").status,
       2);  // option without its value
 }
 

@@ -9,24 +9,12 @@
 #include <filesystem>
 #include <string>
 
+#include "tests/app/cli_util.h"
+
 namespace {
 
-struct Result {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
-
-Result RunHgrasp(const std::string& args) {
-  Result r;
-  const std::string cmd = std::string(HGRASP_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
-  const int raw = pclose(pipe);
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
-}
+using hgrasp::testing::RunHgrasp;
+using Result = hgrasp::testing::CliResult;
 
 std::string Data(const std::string& name) {
   return std::string(HGRASP_TEST_DATA) + "/scenarios/" + name;

@@ -39,23 +39,9 @@ TEST(ScanAccuracyTest, SelfCalibrationRecoversTheLightPlane) {
   device::HeadState hs;
   dev.head->Read(&hs);
   const Pose3 X_WH = head.X_WH(hs.q);
-  // Compared where the scene is: the true plane's points nearest to workspace points.
-  const Eigen::Vector3d probes[] = {{0.30, 0.0, 0.05},
-                                    {0.20, -0.15, 0.0},
-                                    {0.20, 0.15, 0.0},
-                                    {0.40, -0.15, 0.15},
-                                    {0.40, 0.15, 0.15}};
-  double worst_deg = 0, worst_mm = 0;
-  for (std::int32_t count = -2400; count <= 2400; count += 10) {
-    const Plane truth = robot.rig().LaserPlaneAt(count * sim::kLaserRadPerCount);
-    const Plane mine = cal.PlaneH(count).TransformedBy(X_WH);
-    worst_deg =
-        std::max(worst_deg, RadToDeg(std::acos(std::min(1.0, std::abs(truth.n.dot(mine.n))))));
-    for (const Eigen::Vector3d& q : probes) {
-      const Eigen::Vector3d on_truth = q - truth.SignedDistance(q) * truth.n;
-      worst_mm = std::max(worst_mm, 1e3 * std::abs(mine.SignedDistance(on_truth)));
-    }
-  }
+  const sim::LaserPlaneError e = sim::CompareLaserPlanes(
+      robot.rig(), [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, -2400, 2400);
+  const double worst_deg = e.worst_deg, worst_mm = e.worst_mm;
   std::printf(
       "self-calibration: %d of %d stripe positions, residue %.3f px; worst %.4f deg, %.3f mm\n",
       report.counts_used, report.frames, report.rms_residue_px, worst_deg, worst_mm);
