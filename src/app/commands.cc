@@ -121,7 +121,9 @@ int Render(const RenderOptions& o) {
                        "a count within the laser's range (about +-4500)");
     }
     frame = GrabWhenSettled(dev);
-    const std::string suffix = "_" + std::to_string(count) + ".png";
+    // Built by appending: GCC 12 warns falsely (-Wrestrict) on "_" + to_string(...) + ".png".
+    std::string suffix = "_";
+    suffix.append(std::to_string(count)).append(".png");
     outputs.push_back({"left_stripe" + suffix, frame.left});
     outputs.push_back({"right_stripe" + suffix, frame.right});
     if (count == o.encoder_counts.front()) {
