@@ -13,7 +13,7 @@ OUT      ?= out/default
 PACKAGES := build-essential cmake pkg-config git \
 	libmujoco-dev libeigen3-dev libopencv-dev liburdfdom-dev liburdfdom-tools \
 	libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
-	libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri \
+	libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri \
 	libgtest-dev libgmock-dev libbenchmark-dev
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
