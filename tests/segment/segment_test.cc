@@ -178,6 +178,28 @@ TEST(GroupObjects, TwoBoxesFarApartAreTwoObjects) {
   EXPECT_EQ(g.objects[1].size(), 3u);
 }
 
+TEST(GroupObjects, GapsAlongABoxsEdgesAreBridged) {
+  // The scanner loses the stripe along a box's edges (it is cut there): top, front and side end up
+  // a couple of cells apart in the range image. They are still one object. (On the simulated
+  // default scene, 4-neighbour grouping split one box into two objects.)
+  RangeImage img = BoxScene();
+  for (int c = 0; c < img.cols(); ++c) {
+    for (int r : {11, 12}) img.at(r, c).valid = false;  // top | front: 10.6 mm apart
+  }
+  for (int r = 12; r < 32; ++r) {
+    for (int c : {31, 32}) img.at(r, c).valid = false;  // side | front: 10.6 mm apart
+  }
+  const SegmentResult s = SegmentPlanes(img);
+  ASSERT_EQ(s.regions.size(), 4u);
+  const Grouping g = GroupObjects(s, img);
+  ASSERT_EQ(g.objects.size(), 1u);
+  EXPECT_EQ(g.objects[0].size(), 3u);
+  // Without the reach, as before the fix: three objects.
+  SegmentConfig adjacent_only;
+  adjacent_only.group_reach_cells = 1;
+  EXPECT_EQ(GroupObjects(s, img, adjacent_only).objects.size(), 3u);
+}
+
 TEST(GroupObjects, WallBehindEverythingIsRemoved) {
   RangeImage img(100, 80);
   AddTable(&img);
