@@ -8,6 +8,7 @@
 
 #include "common/geometry.h"
 #include "segment/segment.h"
+#include "tests/scan/synthetic_range.h"
 
 namespace hgrasp::model {
 namespace {
@@ -15,30 +16,8 @@ namespace {
 using Eigen::Vector3d;
 using scan::RangeImage;
 
-/// Fills rows [r0, r0 + nr) x cols [c0, c0 + nc) with points origin + (r - r0) dr + (c - c0) dc
-/// (copied from tests/segment/segment_test.cc).
-void FillBlock(RangeImage* img, int r0, int nr, int c0, int nc, const Vector3d& origin,
-               const Vector3d& dr, const Vector3d& dc) {
-  for (int r = r0; r < r0 + nr; ++r) {
-    for (int c = c0; c < c0 + nc; ++c) {
-      scan::RangeCell& cell = img->at(r, c);
-      cell.valid = true;
-      cell.p_W = origin + (r - r0) * dr + (c - c0) * dc;
-      cell.p_C = cell.p_W;
-    }
-  }
-}
-
-void AddNoise(RangeImage* img, double sigma, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  for (int r = 0; r < img->rows(); ++r) {
-    for (int c = 0; c < img->cols(); ++c) {
-      scan::RangeCell& cell = img->at(r, c);
-      if (cell.valid) cell.p_W += Vector3d(g(rng), g(rng), g(rng));
-    }
-  }
-}
+using scan::testing::AddNoise;
+using scan::testing::FillBlock;
 
 /// Which side faces the scene shows besides the top.
 enum class Sides { kNone, kFront, kFrontAndLeft, kFrontAndRight };

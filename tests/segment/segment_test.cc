@@ -8,6 +8,7 @@
 #include <random>
 
 #include "common/error.h"
+#include "tests/scan/synthetic_range.h"
 
 namespace hgrasp::segment {
 namespace {
@@ -17,29 +18,8 @@ using scan::RangeImage;
 
 constexpr double kStep = 0.005;  // grid spacing of the synthetic surfaces (m)
 
-/// Fills rows [r0, r0 + nr) x cols [c0, c0 + nc) with points origin + (r - r0) dr + (c - c0) dc.
-void FillBlock(RangeImage* img, int r0, int nr, int c0, int nc, const Vector3d& origin,
-               const Vector3d& dr, const Vector3d& dc) {
-  for (int r = r0; r < r0 + nr; ++r) {
-    for (int c = c0; c < c0 + nc; ++c) {
-      scan::RangeCell& cell = img->at(r, c);
-      cell.valid = true;
-      cell.p_W = origin + (r - r0) * dr + (c - c0) * dc;
-      cell.p_C = cell.p_W;
-    }
-  }
-}
-
-void AddNoise(RangeImage* img, double sigma, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  for (int r = 0; r < img->rows(); ++r) {
-    for (int c = 0; c < img->cols(); ++c) {
-      scan::RangeCell& cell = img->at(r, c);
-      if (cell.valid) cell.p_W += Vector3d(g(rng), g(rng), g(rng));
-    }
-  }
-}
+using scan::testing::AddNoise;
+using scan::testing::FillBlock;
 
 // An axis-aligned box x in [x0, x0 + 0.06], y in [y0, y0 + 0.09], z in [0, 0.1], laid out in the
 // range image from column c0: top (rows 0-11, 18 columns), front face x = x0 (rows 12-31, same
