@@ -25,7 +25,10 @@ namespace hgrasp::sim {
 struct StripeOptics {
   double sheet_sigma_m = 0.0008;  ///< Gaussian half-thickness of the light sheet (m)
   double psf_sigma_px = 0.6;      ///< lens blur (pixels)
-  double gain = 300.0;            ///< grey levels for a white surface 0.6 m away facing the laser
+  /// Grey levels for a white surface 0.6 m away facing the laser. Bright enough that the stripe
+  /// shows on dark faces lit at a slant (a blue box's front: red reflectance 0.15, incidence about
+  /// 60 deg, about 10 grey levels); white surfaces near the laser then clip.
+  double gain = 600.0;
   double reference_range_m = 0.6;
   /// Camera response to the red laser light per channel (B, G, R): mostly red, some crosstalk.
   Eigen::Vector3d channel_response{0.06, 0.12, 1.0};

@@ -88,12 +88,14 @@ LaserCoefficients Scanner::CoefficientsAt(std::int32_t count, double verge) {
   return CoefficientsFromPlane(laser_.PlaneH(count).TransformedBy(X_HM.inverse()), rect.b);
 }
 
-void Scanner::ProcessFrame(const device::StereoFrame& frame, const cv::Mat& ambient_left,
+void Scanner::ProcessFrame(const device::StereoFrame& frame, const device::StereoFrame& ambient,
                            RangeImage* range, int col, StripeFrameResult* result) {
+  const cv::Mat& ambient_left = ambient.left;
   const double verge = VergeKey(frame.head.verge);
   const Rectification& rect = RectificationAt(verge);
   auto& processor = processors_[verge];
   if (!processor) processor = std::make_unique<StripeFrameProcessor>(&rect, config_);
+  processor->SetAmbient(ambient.left, ambient.right);
   processor->Process(frame.left, frame.right, CoefficientsAt(frame.laser_encoder_count, verge),
                      result);
   const Pose3 X_WCL = head_.X_WC(0, frame.head);
@@ -122,7 +124,7 @@ ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
   out.range = RangeImage(cameras_.left.height, static_cast<int>(frames.size()));
   StripeFrameResult result;
   for (size_t i = 0; i < frames.size(); ++i) {
-    ProcessFrame(frames[i], out.ambient_left, &out.range, static_cast<int>(i), &result);
+    ProcessFrame(frames[i], ambient, &out.range, static_cast<int>(i), &result);
     out.range.encoder_counts.push_back(frames[i].laser_encoder_count);
     out.points += static_cast<int>(result.points.size());
     out.rejected += result.rejected;

@@ -46,8 +46,10 @@ class Scanner {
   ScanResult Scan(device::RobotDevices& dev, const SweepConfig& sweep);
 
   /// Processes one frame pair as Scan does, into column `col` of `range` (which must have as
-  /// many rows as the images): for benchmarks and tests.
-  void ProcessFrame(const device::StereoFrame& frame, const cv::Mat& ambient_left,
+  /// many rows as the images): for benchmarks and tests. `ambient` is the pair taken with the
+  /// laser off: it is subtracted from the frame before the stripe is searched (see
+  /// StripeFrameProcessor::SetAmbient), and its left image gives each point's colour.
+  void ProcessFrame(const device::StereoFrame& frame, const device::StereoFrame& ambient,
                     RangeImage* range, int col, StripeFrameResult* result);
 
   /// Verge readings within this step (rad) share one rectification: 1e-5 rad moves a point

@@ -18,6 +18,9 @@ struct StripeDetectorConfig {
   int min_contrast = 8;  ///< grey levels above both sides
   /// The two sides' background may differ by at most this fraction of the peak's height: a
   /// stripe cut off by an occluding edge (one side another surface) is not located reliably.
+  /// When the samples half_width out fail this, the nearest ones clear of the stripe's core
+  /// (2 pixels out) may stand in on one side: an edge 2-3 pixels from the stripe leaves its
+  /// core on one surface.
   double max_background_step = 0.5;
   int max_candidates = 8;  ///< strongest kept per row
   int saturation = 255;    ///< grey level at which the camera clips
@@ -29,8 +32,12 @@ struct StripeCandidate {
 };
 
 /// Candidates on `row` (length `width`, one channel), strongest first, at most
-/// `config.max_candidates`. `out` is cleared first.
+/// `config.max_candidates`. `out` is cleared first. With `ambient` (the same row with the laser
+/// off, `width` long), the stripe is searched in row - ambient, so that it stands on a flat
+/// background even where a dark surface meets a bright one; pixels of `row` at the saturation
+/// level are known as clipped either way.
 void DetectStripeCandidates(const std::uint8_t* row, int width, const StripeDetectorConfig& config,
-                            std::vector<StripeCandidate>* out);
+                            std::vector<StripeCandidate>* out,
+                            const std::uint8_t* ambient = nullptr);
 
 }  // namespace hgrasp::scan

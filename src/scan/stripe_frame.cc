@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "common/error.h"
 
 namespace hgrasp::scan {
 
@@ -56,6 +59,29 @@ void StripeFrameProcessor::RectifyBand(int camera, const cv::Mat& image, std::pa
             cv::BORDER_CONSTANT, cv::Scalar(0));
 }
 
+void StripeFrameProcessor::SetAmbient(const cv::Mat& left, const cv::Mat& right) {
+  const Rectification& R = *rect_;
+  for (int camera = 0; camera < 2; ++camera) {
+    const cv::Mat& image = camera == 0 ? left : right;
+    if (image.empty()) {
+      ambient_[camera].release();
+      ambient_rectified_[camera].release();
+      continue;
+    }
+    // The same images again (the usual case: one ambient pair per scan) cost a comparison.
+    if (!ambient_[camera].empty() && ambient_[camera].size() == image.size() &&
+        ambient_[camera].type() == image.type() &&
+        cv::norm(ambient_[camera], image, cv::NORM_INF) == 0) {
+      continue;
+    }
+    image.copyTo(ambient_[camera]);
+    cv::Mat red;
+    cv::extractChannel(image, red, 2);
+    cv::remap(red, ambient_rectified_[camera], R.map1[camera], R.map2[camera], cv::INTER_LINEAR,
+              cv::BORDER_CONSTANT, cv::Scalar(0));
+  }
+}
+
 void StripeFrameProcessor::Rectify(const cv::Mat& left, const cv::Mat& right) {
   RectifyBand(0, left, {0, rect_->width - 1});
   RectifyBand(1, right, {0, rect_->width - 1});
@@ -91,13 +117,43 @@ void StripeFrameProcessor::Process(const cv::Mat& left, const cv::Mat& right,
   RectifyBand(0, left, StripeBand(0, c));
   if (config_.stereo) RectifyBand(1, right, StripeBand(1, c));
   const Rectification& R = *rect_;
-  const auto detect = [&](int cam, int row) {
+  // Candidates of every row, down to weak_contrast; the weak ones then need the stripe to go on
+  // through them on the rows above and below.
+  StripeDetectorConfig weak = config_.detector;
+  weak.min_contrast = std::min(config_.weak_contrast, config_.detector.min_contrast);
+  for (int cam = 0; cam < (config_.stereo ? 2 : 1); ++cam) {
     const auto [first, last] = band_[cam];
+    std::vector<std::vector<StripeCandidate>>& rows = rows_[cam];
+    rows.resize(R.height);
+    for (int row = 0; row < R.height; ++row) {
+      rows[row].clear();
+      if (last < first) continue;
+      const std::uint8_t* ambient = ambient_rectified_[cam].empty()
+                                        ? nullptr
+                                        : ambient_rectified_[cam].ptr<std::uint8_t>(row) + first;
+      DetectStripeCandidates(rectified_[cam].ptr<std::uint8_t>(row) + first, last - first + 1, weak,
+                             &rows[row], ambient);
+      for (StripeCandidate& k : rows[row]) k.x += first;
+    }
+  }
+  const auto supported = [&](int cam, int row, double x) {
+    const auto near = [&](int r) {
+      if (r < 0 || r >= R.height) return false;
+      const double step = std::abs(r - row) * config_.max_support_step_px;
+      for (const StripeCandidate& k : rows_[cam][r]) {
+        if (std::abs(k.x - x) <= step) return true;
+      }
+      return false;
+    };
+    return near(row - 1) && near(row + 1) && near(row - 2) && near(row + 2);
+  };
+  const auto detect = [&](int cam, int row) {
     candidates_[cam].clear();
-    if (last < first) return;
-    DetectStripeCandidates(rectified_[cam].ptr<std::uint8_t>(row) + first, last - first + 1,
-                           config_.detector, &candidates_[cam]);
-    for (StripeCandidate& k : candidates_[cam]) k.x += first;
+    for (const StripeCandidate& k : rows_[cam][row]) {
+      if (k.contrast >= config_.detector.min_contrast || supported(cam, row, k.x)) {
+        candidates_[cam].push_back(k);
+      }
+    }
   };
   const Plane plane_M = config_.stereo ? Plane{} : PlaneFromCoefficients(c, R.b);
   for (int row = 0; row < R.height; ++row) {
@@ -133,6 +189,29 @@ void StripeFrameProcessor::Process(const cv::Mat& left, const cv::Mat& right,
     }
     out->points.push_back({row, xL, xR, m->residue, p_M});
   }
+  if (config_.stereo) RejectIsolated(out);
+}
+
+void StripeFrameProcessor::RejectIsolated(StripeFrameResult* out) const {
+  // Points come in row order: the neighbours of point i are among i-2..i+2.
+  std::vector<StripePoint>& points = out->points;
+  const double gap2 = config_.max_neighbour_gap_m * config_.max_neighbour_gap_m;
+  std::vector<char> keep(points.size(), 0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    for (size_t j = i >= 2 ? i - 2 : 0; j < std::min(points.size(), i + 3); ++j) {
+      if (j != i && std::abs(points[j].row - points[i].row) <= 2 &&
+          (points[j].p_M - points[i].p_M).squaredNorm() < gap2) {
+        keep[i] = 1;
+        break;
+      }
+    }
+  }
+  size_t n = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (keep[i]) points[n++] = points[i];
+  }
+  out->rejected += static_cast<int>(points.size() - n);
+  points.resize(n);
 }
 
 void StripeFrameProcessor::CandidatePairs(int per_image,

@@ -14,6 +14,17 @@ namespace hgrasp::scan {
 
 struct StripeFrameConfig {
   StripeDetectorConfig detector;
+  /// Candidates weaker than detector.min_contrast but at least this strong (grey levels) are
+  /// kept when the stripe continues through them: a candidate within k max_support_step_px on
+  /// the rows k = 1 and 2 above and below. The light plane cuts a surface in a continuous curve,
+  /// camera noise seldom lines up over three rows: dim stripes (dark faces lit at a slant) are
+  /// found without admitting noise peaks.
+  int weak_contrast = 5;
+  double max_support_step_px = 1.5;
+  /// Stereo: a point with no other point of the frame within this distance (m) on the two rows
+  /// above and below is refused. The light plane cuts a surface in a continuous curve; a lone
+  /// point is a chance pairing of two unrelated candidates (noise, another stripe).
+  double max_neighbour_gap_m = 0.01;
   /// A pair is valid when |xL + alpha xR + beta y + gamma f| is below this (pixels): five times
   /// the residue's spread on the calibrated simulated robot (0.06 px RMS, camera noise 2).
   double max_residue_px = 0.3;
@@ -35,8 +46,8 @@ struct StripePoint {
 
 struct StripeFrameResult {
   std::vector<StripePoint> points;
-  /// Rows with candidates whose point was refused: no pair within max_residue_px (stereo), or
-  /// a point outside [min_range_m, max_range_m].
+  /// Rows with candidates whose point was refused: no pair within max_residue_px (stereo), a
+  /// point outside [min_range_m, max_range_m], or a lone point (stereo; max_neighbour_gap_m).
   int rejected = 0;
 };
 
@@ -80,6 +91,12 @@ class StripeFrameProcessor {
   /// Rectifies the red channels only (whole images).
   void Rectify(const cv::Mat& left, const cv::Mat& right);
 
+  /// The images with the laser off (unrectified BGR, head where it is for the frames): from now
+  /// on, Process searches the stripe in each frame's rectified red channel less theirs (see
+  /// DetectStripeCandidates), so that it stands on a flat background even where a dark surface
+  /// meets a bright one. Empty images switch this off. Setting the same images again is cheap.
+  void SetAmbient(const cv::Mat& left, const cv::Mat& right);
+
   /// Columns [first, last] of camera `camera`'s rectified image where the light plane with
   /// coefficients `c` can show a point between min_range_m and max_range_m (plus the
   /// detector's reach): only there can a valid stripe lie.
@@ -89,12 +106,16 @@ class StripeFrameProcessor {
 
  private:
   void RectifyBand(int camera, const cv::Mat& image, std::pair<int, int> band);
+  /// Removes the points with no neighbour (max_neighbour_gap_m, rows +-2); counts them rejected.
+  void RejectIsolated(StripeFrameResult* out) const;
 
   const Rectification* rect_;
   StripeFrameConfig config_;
   std::pair<int, int> band_[2];
   cv::Mat red_[2], rectified_[2];
+  cv::Mat ambient_[2], ambient_rectified_[2];  // as given (BGR); rectified red channel
   std::vector<StripeCandidate> candidates_[2];
+  std::vector<std::vector<StripeCandidate>> rows_[2];  // per row, before the support test
 };
 
 }  // namespace hgrasp::scan

@@ -87,7 +87,7 @@ ScanFigures ScanAgainstTruth(const sim::Scenario& scenario, bool stereo = true) 
       if (z > 0 && std::abs(z - p_CR.z()) < 0.003) truth.push_back(x.p_W);
     }
     column = RangeImage(240, 1);
-    scanner.ProcessFrame(frame, ambient.left, &column, 0, &result);
+    scanner.ProcessFrame(frame, ambient, &column, 0, &result);
     std::vector<Eigen::Vector3d> found;
     for (int r = 0; r < 240; ++r) {
       const RangeCell& c = column.at(r, 0);

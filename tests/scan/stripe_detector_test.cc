@@ -139,6 +139,22 @@ TEST(StripeDetectorTest, StripeOnAnOccludingEdgeIsRejected) {
   EXPECT_EQ(Detect(MakeRow(200, step(80, 100), {{100.0, 100.0}})).size(), 1u);
 }
 
+TEST(StripeDetectorTest, StripeBesideAnEdgeIsLocated) {
+  // A dark box's face (30) beside the bright table (150); the stripe (amplitude 25, as on a
+  // blue surface) 2.5 pixels inside the face's edge: its core lies on the face, and its centre
+  // is found from the face's background (the samples 3 pixels out straddle the edge).
+  for (double centre : {100.0, 100.3}) {
+    for (const bool edge_left : {true, false}) {
+      const auto background = [&](int x) {
+        return (edge_left ? x < centre - 2.5 : x > centre + 2.5) ? 150.0 : 30.0;
+      };
+      const auto found = Detect(MakeRow(200, background, {{centre, 25.0}}));
+      ASSERT_EQ(found.size(), 1u) << centre << " " << edge_left;
+      EXPECT_NEAR(found[0].x, centre, 0.1) << centre << " " << edge_left;
+    }
+  }
+}
+
 TEST(StripeDetectorTest, FaintStripeBelowContrastIsIgnored) {
   // Amplitude 6: the peak stands about 6 above the background, under min_contrast 8.
   EXPECT_TRUE(Detect(MakeRow(200, kFlat, {{100.0, 6.0}})).empty());

@@ -381,6 +381,98 @@ TEST(StripeFrameProcessorTest, NoStripeNoPointsNoRejections) {
   EXPECT_EQ(out.rejected, 0);
 }
 
+// A scene's stripe drawn only on rows [first, last] (a fragment of it), with amplitude a.
+Scene FragmentScene(int first, int last, double amplitude) {
+  Scene s;
+  for (int v = 0; v < s.rect.height; ++v) {
+    const double y = v - s.rect.cy;
+    s.truth.push_back(PointOnRow(s.plane, y, s.rect.f, [](double) { return 0.6; }));
+  }
+  for (int cam = 0; cam < 2; ++cam) {
+    cv::Mat& image = cam == 0 ? s.left : s.right;
+    for (int v = first; v <= last; ++v) {
+      const Eigen::Vector3d pair = PairOf(s.truth[v], s.rect);
+      const double c = (cam == 0 ? pair.x() : pair.y()) + s.rect.cx;
+      for (int u = 0; u < image.cols; ++u) {
+        cv::Vec3b& px = image.at<cv::Vec3b>(v, u);
+        px[2] = cv::saturate_cast<std::uint8_t>(px[2] + PixelGaussian(u, c, amplitude));
+      }
+    }
+  }
+  return s;
+}
+
+TEST(StripeFrameProcessorTest, LonePointsAreRejected) {
+  // A stripe on one row only, in both images and on the plane: a chance pairing as far as the
+  // processor can tell (no point within 1 cm on the rows around it).
+  Scene lone = FragmentScene(100, 100, 100);
+  StripeFrameProcessor proc(&lone.rect, {});
+  StripeFrameResult out;
+  const LaserCoefficients c = CoefficientsFromPlane(lone.plane, lone.rect.b);
+  proc.Process(lone.left, lone.right, c, &out);
+  EXPECT_TRUE(out.points.empty());
+  EXPECT_EQ(out.rejected, 1);
+  // Two rows of it support each other.
+  Scene two = FragmentScene(100, 101, 100);
+  proc.Process(two.left, two.right, c, &out);
+  EXPECT_EQ(out.points.size(), 2u);
+  EXPECT_EQ(out.rejected, 0);
+}
+
+TEST(StripeFrameProcessorTest, WeakStripeFoundWhereItRunsOnThroughTheRows) {
+  // Amplitude 7: the peak stands about 6 grey levels up, under min_contrast (8) but over
+  // weak_contrast (5). On 20 consecutive rows every row but the two at each end has support.
+  Scene s = FragmentScene(100, 119, 7);
+  StripeFrameProcessor proc(&s.rect, {});
+  StripeFrameResult out;
+  const LaserCoefficients c = CoefficientsFromPlane(s.plane, s.rect.b);
+  proc.Process(s.left, s.right, c, &out);
+  ASSERT_EQ(out.points.size(), 16u);
+  EXPECT_EQ(out.points.front().row, 102);
+  EXPECT_EQ(out.points.back().row, 117);
+  for (const StripePoint& p : out.points) {
+    EXPECT_LT((p.p_M - s.truth[p.row]).norm(), 0.002) << p.row;
+  }
+  // Without the weak threshold none is found.
+  StripeFrameConfig strict;
+  strict.weak_contrast = strict.detector.min_contrast;
+  StripeFrameProcessor strict_proc(&s.rect, strict);
+  strict_proc.Process(s.left, s.right, c, &out);
+  EXPECT_TRUE(out.points.empty());
+}
+
+TEST(StripeFrameProcessorTest, AmbientSubtractionFindsTheStripeBesideADarkEdge) {
+  // A dark face (red 30) whose edge lies 2 pixels left of the stripe in both images, on a bright
+  // background (150): the stripe's left background sample (3 pixels out) is on the bright side.
+  Scene s = MakeScene(0.6, 0.0);
+  cv::Mat ambient[2] = {cv::Mat(240, 320, CV_8UC3, cv::Scalar(80, 80, 150)),
+                        cv::Mat(240, 320, CV_8UC3, cv::Scalar(80, 80, 150))};
+  cv::Mat frame[2] = {ambient[0].clone(), ambient[1].clone()};
+  for (int cam = 0; cam < 2; ++cam) {
+    for (int v = 0; v < 240; ++v) {
+      const Eigen::Vector3d pair = PairOf(s.truth[v], s.rect);
+      const double centre = (cam == 0 ? pair.x() : pair.y()) + s.rect.cx;
+      for (int u = static_cast<int>(std::ceil(centre - 2.0)); u < 320; ++u) {
+        ambient[cam].at<cv::Vec3b>(v, u)[2] = 30;
+        frame[cam].at<cv::Vec3b>(v, u)[2] =
+            cv::saturate_cast<std::uint8_t>(30 + PixelGaussian(u, centre, 25));
+      }
+    }
+  }
+  const LaserCoefficients c = CoefficientsFromPlane(s.plane, s.rect.b);
+  StripeFrameResult out;
+  StripeFrameProcessor proc(&s.rect, {});
+  proc.Process(frame[0], frame[1], c, &out);
+  const size_t without = out.points.size();
+  proc.SetAmbient(ambient[0], ambient[1]);
+  proc.Process(frame[0], frame[1], c, &out);
+  EXPECT_EQ(out.points.size(), 240u);
+  EXPECT_LT(without, 240u);
+  for (const StripePoint& p : out.points) {
+    EXPECT_LT((p.p_M - s.truth[p.row]).norm(), 0.001) << p.row;
+  }
+}
+
 // Frontal surface, and one sloping back 0.2 m per m upward (the stripe then leans).
 INSTANTIATE_TEST_SUITE_P(Surface, StripeFrameTest, ::testing::Values(0.0, 0.2),
                          [](const ::testing::TestParamInfo<double>& info) {
