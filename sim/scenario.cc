@@ -41,40 +41,6 @@ namespace {
 
 using Footprint = std::array<Eigen::Vector2d, 4>;
 
-// The four corners of an object's footprint on the table, in W (x, y), counter-clockwise.
-Footprint FootprintOf(const ObjectSpec& o) {
-  const Eigen::Matrix2d R_WO = Eigen::Rotation2Dd(o.yaw).toRotationMatrix();
-  const Eigen::Vector2d half = o.size_O.head<2>() / 2.0;
-  constexpr double kSx[4] = {1, -1, -1, 1}, kSy[4] = {1, 1, -1, -1};
-  Footprint corners;
-  for (int i = 0; i < 4; ++i) {
-    corners[i] = o.position_W + R_WO * Eigen::Vector2d(kSx[i] * half.x(), kSy[i] * half.y());
-  }
-  return corners;
-}
-
-// Separating axis test on two convex quadrilaterals: true when their interiors intersect.
-// Footprints that merely touch (within 1 nm) do not overlap.
-bool FootprintsOverlap(const Footprint& a, const Footprint& b) {
-  constexpr double kTouch = 1e-9;  // m
-  for (const Footprint* poly : {&a, &b}) {
-    for (int i = 0; i < 4; ++i) {
-      const Eigen::Vector2d edge = (*poly)[(i + 1) % 4] - (*poly)[i];
-      const Eigen::Vector2d axis = Eigen::Vector2d(-edge.y(), edge.x()).normalized();
-      double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
-      double b_min = a_min, b_max = -a_min;
-      for (int k = 0; k < 4; ++k) {
-        a_min = std::min(a_min, axis.dot(a[k]));
-        a_max = std::max(a_max, axis.dot(a[k]));
-        b_min = std::min(b_min, axis.dot(b[k]));
-        b_max = std::max(b_max, axis.dot(b[k]));
-      }
-      if (a_max <= b_min + kTouch || b_max <= a_min + kTouch) return false;
-    }
-  }
-  return true;
-}
-
 std::string Fixed(double v, int digits = 3) {
   if (std::abs(v) < 0.5 * std::pow(10.0, -digits)) v = 0.0;  // no "-0.000"
   std::ostringstream s;
@@ -361,7 +327,7 @@ void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes
   for (std::size_t i = 0; i < s.objects.size(); ++i) {
     const ObjectSpec& o = s.objects[i];
     const std::string field = Index("objects", i);
-    footprints.push_back(FootprintOf(o));
+    footprints.push_back(ObjectFootprint(o));
     constexpr double kTol = 1e-9;
     for (const Eigen::Vector2d& c : footprints.back()) {
       if (c.x() < kTableMinX - kTol || c.x() > kTableMaxX + kTol || c.y() < kTableMinY - kTol ||
@@ -492,7 +458,7 @@ Scenario Parser::Parse(const std::string& text) {
   CheckAcrossObjects(s, object_nodes);
   if (s.wall_x) {
     for (std::size_t i = 0; i < s.objects.size(); ++i) {
-      for (const Eigen::Vector2d& c : FootprintOf(s.objects[i])) {
+      for (const Eigen::Vector2d& c : ObjectFootprint(s.objects[i])) {
         if (c.x() >= *s.wall_x) {
           Fail(wall_x_node, "wall.x",
                "a wall beyond every object (" + Index("objects", i) + " '" + s.objects[i].name +
@@ -545,6 +511,40 @@ Scenario LoadScenario(const std::string& path) {
   text << in.rdbuf();
   if (in.bad()) throw InputError(path, "", path, expected + ": read failed");
   return ParseScenario(text.str(), path);
+}
+
+std::array<Eigen::Vector2d, 4> ObjectFootprint(const ObjectSpec& o) {
+  const Eigen::Matrix2d R_WO = Eigen::Rotation2Dd(o.yaw).toRotationMatrix();
+  const Eigen::Vector2d half = o.size_O.head<2>() / 2.0;
+  constexpr double kSx[4] = {1, -1, -1, 1}, kSy[4] = {1, 1, -1, -1};
+  std::array<Eigen::Vector2d, 4> corners;
+  for (int i = 0; i < 4; ++i) {
+    corners[i] = o.position_W + R_WO * Eigen::Vector2d(kSx[i] * half.x(), kSy[i] * half.y());
+  }
+  return corners;
+}
+
+// Separating axis test on two convex quadrilaterals: true when their interiors intersect.
+// Footprints that merely touch (within 1 nm) do not overlap.
+bool FootprintsOverlap(const std::array<Eigen::Vector2d, 4>& a,
+                       const std::array<Eigen::Vector2d, 4>& b) {
+  constexpr double kTouch = 1e-9;  // m
+  for (const std::array<Eigen::Vector2d, 4>* poly : {&a, &b}) {
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector2d edge = (*poly)[(i + 1) % 4] - (*poly)[i];
+      const Eigen::Vector2d axis = Eigen::Vector2d(-edge.y(), edge.x()).normalized();
+      double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
+      double b_min = a_min, b_max = -a_min;
+      for (int k = 0; k < 4; ++k) {
+        a_min = std::min(a_min, axis.dot(a[k]));
+        a_max = std::max(a_max, axis.dot(a[k]));
+        b_min = std::min(b_min, axis.dot(b[k]));
+        b_max = std::max(b_max, axis.dot(b[k]));
+      }
+      if (a_max <= b_min + kTouch || b_max <= a_min + kTouch) return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace hgrasp::sim

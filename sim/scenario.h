@@ -104,6 +104,14 @@ struct Scenario {
 /// unreadable, is not valid YAML, or holds a bad value.
 Scenario LoadScenario(const std::string& path);
 
+/// The corners of an object's footprint on the table, in W (x, y), counter-clockwise.
+std::array<Eigen::Vector2d, 4> ObjectFootprint(const ObjectSpec& o);
+
+/// Whether two footprints' interiors intersect (separating axis test on convex quadrilaterals);
+/// footprints that merely touch (within 1 nm) do not.
+bool FootprintsOverlap(const std::array<Eigen::Vector2d, 4>& a,
+                       const std::array<Eigen::Vector2d, 4>& b);
+
 /// Parses and checks scenario YAML text; `path_for_errors` names it in error messages and becomes
 /// Scenario::path. Throws hgrasp::InputError.
 Scenario ParseScenario(const std::string& yaml_text, const std::string& path_for_errors);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace hgrasp::sim {
 
@@ -72,25 +74,113 @@ double DistanceToBoxSurface(const Pose3& X_WO, const Eigen::Vector3d& size_O,
   return -q.maxCoeff();
 }
 
-double DistanceToTrueSurface(const World& world, const Eigen::Vector3d& p_W) {
-  // The table: 4 cm thick below z = 0 (models/humanoid.xml, geom "table").
-  constexpr double kTableThickness = 0.04;
-  Pose3 X_W_table = Pose3::Identity();
-  X_W_table.translation() << 0.5 * (kTableMinX + kTableMaxX), 0.5 * (kTableMinY + kTableMaxY),
-      -0.5 * kTableThickness;
-  double d = DistanceToBoxSurface(
-      X_W_table, Eigen::Vector3d(kTableMaxX - kTableMinX, kTableMaxY - kTableMinY, kTableThickness),
-      p_W);
-  if (const auto& wall_x = world.scenario().wall_x) {
-    // Must match the wall geom of World (sim/world.cc, ObjectsXml): 2 cm thick, 2 m wide, 1 m
-    // high, its near face the plane x = wall_x.
-    Pose3 X_W_wall = Pose3::Identity();
-    X_W_wall.translation() << *wall_x + 0.01, 0.0, 0.5;
-    d = std::min(d, DistanceToBoxSurface(X_W_wall, Eigen::Vector3d(0.02, 2.0, 1.0), p_W));
+namespace {
+
+// A box-shaped geom: its centre pose in W and full edge lengths (m).
+struct TrueBox {
+  Pose3 X_WB = Pose3::Identity();
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  double Distance(const Eigen::Vector3d& p_W) const {
+    return DistanceToBoxSurface(X_WB, size, p_W);
   }
+};
+
+// The table: 4 cm thick below z = 0 (models/humanoid.xml, geom "table").
+TrueBox TableBox() {
+  constexpr double kTableThickness = 0.04;
+  TrueBox b;
+  b.X_WB.translation() << 0.5 * (kTableMinX + kTableMaxX), 0.5 * (kTableMinY + kTableMaxY),
+      -0.5 * kTableThickness;
+  b.size << kTableMaxX - kTableMinX, kTableMaxY - kTableMinY, kTableThickness;
+  return b;
+}
+
+// Must match the wall geom of World (sim/world.cc, ObjectsXml): 2 cm thick, 2 m wide, 1 m high,
+// its near face the plane x = wall_x.
+TrueBox WallBox(double wall_x) {
+  TrueBox b;
+  b.X_WB.translation() << wall_x + 0.01, 0.0, 0.5;
+  b.size << 0.02, 2.0, 1.0;
+  return b;
+}
+
+}  // namespace
+
+double DistanceToTrueSurface(const World& world, const Eigen::Vector3d& p_W) {
+  double d = TableBox().Distance(p_W);
+  if (const auto& wall_x = world.scenario().wall_x) d = std::min(d, WallBox(*wall_x).Distance(p_W));
   for (const SimObject& o : world.objects())
     d = std::min(d, DistanceToBoxSurface(world.BodyPose(o.body), o.spec.size_O, p_W));
   return d;
+}
+
+int NearestBoxFace(const Pose3& X_WO, const Eigen::Vector3d& size_O, const Eigen::Vector3d& p_W) {
+  const Eigen::Vector3d p_O = X_WO.inverse() * p_W;
+  // The signed distance beyond each face's plane (negative inside). The faces nearest to a point
+  // are those it lies beyond (all equally near: the distance to each face rectangle is the norm
+  // of the amounts beyond) or, inside the box, the one with the least negative value: the largest
+  // value picks one of them either way.
+  int best = 0;
+  double best_q = -std::numeric_limits<double>::infinity();
+  for (int face = 0; face < 6; ++face) {
+    const int axis = face / 2;
+    const double q = (face % 2 == 0 ? p_O[axis] : -p_O[axis]) - 0.5 * size_O[axis];
+    if (q > best_q) {
+      best_q = q;
+      best = face;
+    }
+  }
+  return best;
+}
+
+std::vector<int> TrueFaceLabels(const World& world, StereoRig* rig, int camera,
+                                const std::vector<Eigen::Vector3d>& p_W, double tol_m) {
+  const CameraView& view = rig->View(camera);
+  const Pose3 X_CW = view.X_WC.inverse();
+  const cv::Mat& label = view.images.label;
+
+  // What each geom id is: an object's index, or one of these.
+  constexpr int kOther = -1, kTable = -2, kWall = -3;
+  const mjModel* m = world.model();
+  std::vector<int> kind(m->ngeom, kOther);
+  kind[world.Id(mjOBJ_GEOM, "table")] = kTable;
+  const std::optional<double> wall_x = world.scenario().wall_x;
+  if (wall_x) kind[world.Id(mjOBJ_GEOM, "wall")] = kWall;
+  const std::vector<SimObject>& objects = world.objects();
+  std::vector<Pose3> X_WO(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    kind[objects[i].geom] = static_cast<int>(i);
+    X_WO[i] = world.BodyPose(objects[i].body);
+  }
+  const Eigen::Vector3d p_WC = view.X_WC.translation();  // the optical centre
+  const TrueBox table = TableBox();
+  const TrueBox wall = wall_x ? WallBox(*wall_x) : TrueBox();
+
+  std::vector<int> codes(p_W.size(), kTruthNone);
+  for (std::size_t i = 0; i < p_W.size(); ++i) {
+    const std::optional<Eigen::Vector2d> uv = view.camera.Project(X_CW * p_W[i]);
+    if (!uv) continue;
+    // The pixel (column c, row r) has its centre at (u, v) = (c, r) (common/pinhole_camera.h).
+    const long c = std::lround(uv->x()), r = std::lround(uv->y());
+    if (c < 0 || r < 0 || c >= label.cols || r >= label.rows) continue;
+    const int geom = label.at<int>(static_cast<int>(r), static_cast<int>(c));
+    if (geom < 0 || geom >= m->ngeom) continue;
+    const int k = kind[geom];
+    if (k == kTable) {
+      if (table.Distance(p_W[i]) <= tol_m) codes[i] = kTruthTable;
+    } else if (k == kWall) {
+      if (wall.Distance(p_W[i]) <= tol_m) codes[i] = kTruthWall;
+    } else if (k >= 0) {
+      const Eigen::Vector3d& size = objects[k].spec.size_O;
+      if (DistanceToBoxSurface(X_WO[k], size, p_W[i]) > tol_m) continue;
+      const int face = NearestBoxFace(X_WO[k], size, p_W[i]);
+      // The label image shows the box's front wherever its back faces project: a point near a
+      // face turned away from the camera is not what the camera sees there.
+      const Eigen::Vector3d n_W = (face % 2 == 0 ? 1.0 : -1.0) * X_WO[k].linear().col(face / 2);
+      if (n_W.dot(p_WC - p_W[i]) > 0.0) codes[i] = TruthFaceCode(k, face);
+    }
+  }
+  return codes;
 }
 
 LaserPlaneError CompareLaserPlanes(const StereoRig& rig,

@@ -33,6 +33,37 @@ double DistanceToTrueSurface(const World& world, const Eigen::Vector3d& p_W);
 double DistanceToBoxSurface(const Pose3& X_WO, const Eigen::Vector3d& size_O,
                             const Eigen::Vector3d& p_W);
 
+/// Codes of TrueFaceLabels: no true surface, the table top, the wall.
+constexpr int kTruthNone = -1, kTruthTable = 0, kTruthWall = 1;
+
+/// Code of face `face` of scenario object `object_index` (index into world.objects()):
+/// 2 + 6 * object_index + face, with face 0 +x, 1 -x, 2 +y, 3 -y, 4 +z (the top), 5 -z (the
+/// bottom), in the object's own frame O.
+inline int TruthFaceCode(int object_index, int face) { return 2 + 6 * object_index + face; }
+
+/// The face (0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z of O) of the box of full edge lengths `size_O`
+/// centred at X_WO whose rectangle lies nearest to p_W, inside the box too. Beyond an edge or a
+/// corner several faces are equally near: the one whose plane p_W lies farthest beyond is taken
+/// (exact ties go to the lower face number).
+int NearestBoxFace(const Pose3& X_WO, const Eigen::Vector3d& size_O, const Eigen::Vector3d& p_W);
+
+/// The true surface under each point p_W[i] (W, m), from the simulator's label image of camera
+/// `camera` (kLeft or kRight) as rig->View(camera) renders it now: the point is projected with
+/// that view's pose X_WC and intrinsics, and the geom labelled at the nearest pixel says what the
+/// camera sees there:
+///  - a scenario object (index i in world.objects()): TruthFaceCode(i, face), the face of its box
+///    (at world.BodyPose) nearest to the point (NearestBoxFace);
+///  - the table: kTruthTable; the wall: kTruthWall;
+///  - the robot's own geoms, the background, or a point outside the image or behind the camera:
+///    kTruthNone.
+/// A point farther than tol_m (m) from that geom's surface (DistanceToBoxSurface; the table and
+/// wall as in DistanceToTrueSurface) gets kTruthNone: it does not lie on what the camera sees
+/// there (an occlusion edge, a surface hidden behind another, or a bad range). So does a point
+/// whose nearest face turns away from the camera (outward normal pointing away from the optical
+/// centre): the label image shows the same box's front there, not that face.
+std::vector<int> TrueFaceLabels(const World& world, StereoRig* rig, int camera,
+                                const std::vector<Eigen::Vector3d>& p_W, double tol_m = 0.005);
+
 /// How far a calibrated light plane lies from the simulator's, over encoder counts.
 struct LaserPlaneError {
   double worst_deg = 0;  ///< largest angle between the normals
