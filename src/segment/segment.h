@@ -23,6 +23,9 @@ struct SegmentConfig {
   double alpha2 = 0.1;
   /// Merging stops when the cheapest merge's plane-fit residual (m^2) exceeds this.
   double max_merge_residual_m2 = 4e-6;
+  /// Passes of boundary refinement after merging: a cell next to another region whose plane it
+  /// lies nearer moves there (0: none).
+  int refine_passes = 3;
   /// Regions with fewer cells are dropped at the end.
   int min_region_cells = 30;
   /// Two 4-neighbouring cells are connected only if their 3-D points are closer than this (m);
@@ -53,16 +56,24 @@ struct SegmentResult {
   std::vector<PlaneRegion> regions;  ///< regions[k].id are distinct; ids need not be contiguous
 };
 
-/// Segments a range image into planar regions (paper 5.1): patch normals (plane fit to the valid
-/// cells of a patch x patch window; residual above max_patch_residual_m2 -> no normal) -> initial
-/// segmentation by sequential binary connectivity with the paper's coplanarity tests (alpha1,
-/// alpha2) between 4-neighbours closer than max_neighbour_gap_m -> cells without a valid normal
-/// join the neighbouring region whose plane they satisfy (distance < 3 sqrt(max_patch_residual))
-/// -> region merging by boundary-cost minimisation (repeatedly merge the adjacent pair whose
-/// merged plane fit has the smallest residual, until that exceeds max_merge_residual_m2) -> regions
-/// under min_region_cells are dropped (their cells become -1). Merging keeps per-region moment
-/// sums, so a merged residual costs O(1), and a priority queue of candidate pairs with lazy
-/// invalidation. Throws InputError for an invalid config.
+/// Segments a range image into planar regions (paper 5.1):
+///  1. patch normals: a plane fitted to the valid cells of each patch x patch window (moment sums
+///     from a separable box filter); residual above max_patch_residual_m2 -> no normal;
+///  2. initial segmentation by sequential binary connectivity with the paper's coplanarity tests
+///     (n1.n2 > alpha1, max(|r12.n1|, |r12.n2|) < alpha2, r12 between the two patches' means, the
+///     paper's m_i) between 4-neighbours closer than max_neighbour_gap_m;
+///  3. cells without a valid normal join the neighbouring region whose plane they satisfy
+///     (distance < 3 sqrt(max_patch_residual_m2)), nearest plane first;
+///  4. region merging by boundary-cost minimisation: repeatedly merge the adjacent pair whose
+///     merged plane fit has the smallest residual, until that exceeds max_merge_residual_m2.
+///     Per-region moment sums make a merged residual O(1); adjacent regions of at most three cells
+///     together (cost exactly 0) merge first; then each region keeps its neighbours' merge costs
+///     (recomputed when either changes) and an indexed priority queue orders the regions by their
+///     cheapest merge; ties go to the lower region index;
+///  5. refine_passes passes of boundary refinement: a cell next to another region whose plane it
+///     lies nearer moves there;
+///  6. regions under min_region_cells are dropped (their cells become -1).
+/// Throws InputError for an invalid config.
 SegmentResult SegmentPlanes(const scan::RangeImage& range, const SegmentConfig& config = {});
 
 /// The result of GroupObjects.
@@ -72,9 +83,12 @@ struct Grouping {
 };
 
 /// Floor and wall removal (paper 5.1): repeatedly, a horizontal region (|n.z| > 0.95) whose
-/// centroid is lowest, with every other remaining region's centroid at least 5 mm above it, is a
-/// floor; a vertical region (|n.z| < 0.1) with the largest centroid x, every other remaining
-/// region's centroid at least 2 cm nearer in x, is a wall; removed until none remain. The
+/// centroid is lowest, with every other remaining region's centroid at least 5 mm above it and
+/// none above an earlier floor's by more than 5 mm, is a floor (a plane below all other planes,
+/// the removed ones included: a lone box top left over the table is no second floor); a vertical
+/// region (|n.z| < 0.1) with the largest centroid x, every other remaining region's centroid at
+/// least 2 cm nearer in x and not more than 2 cm nearer than an earlier wall's, is a wall;
+/// removed until none remain. The
 /// remaining regions are grouped into connected objects: two regions are in one group when some
 /// pair of their cells lie within config.group_reach_cells of each other in the range image with
 /// 3-D points closer than config.max_group_gap_m. s must come from SegmentPlanes on range (aborts
