@@ -1,8 +1,10 @@
 #include "model/box_fit.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <unordered_map>
 
 #include "common/error.h"
@@ -15,6 +17,8 @@ using Eigen::Vector3d;
 constexpr double kMinEdgeM = 0.01;   // shortest accepted box edge (m)
 constexpr double kMaxEdgeM = 0.5;    // longest accepted box edge (m)
 constexpr double kMinDepthM = 0.01;  // a hidden face lies at least this far beyond its visible one
+// Top edge points farther off its plane than this, or 3 sigma of its points, are unsure.
+constexpr double kMaxEdgeOffPlaneM = 0.002;
 
 /// Appends the 3-D points of the cells labelled id that have a 4-neighbour which is invalid,
 /// outside the image or labelled differently.
@@ -34,17 +38,20 @@ void AppendEdgePoints(const segment::SegmentResult& s, const scan::RangeImage& r
   }
 }
 
-/// A hidden face from the edge points along its normal: their robust extreme (the 99th
-/// percentile), if beyond min_t. The stripe crosses a face's far end at a slant, so its edge
-/// points there are ragged over about a centimetre. The paper's vote (c_i = sum_j (d_j + 1)^-2,
-/// the densest line of edge points) then picks a line inside that band, 5-8 mm short on the
-/// simulated scans, where the extreme is right.
-std::optional<double> Extreme(std::vector<double> t, double min_t) {
+/// A hidden face from the edge points along its normal, t (m), if beyond min_t. The stripe
+/// crosses a face's far end at a slant, so its edge points there are ragged over about a
+/// centimetre; the paper's vote (c_i = sum_j (d_j + 1)^-2, the densest line of edge points)
+/// picks a line inside that band, 5-8 mm short on the simulated scans. Here: the robust extreme
+/// (the 99th percentile) of the edge points, plus a quarter of the cells' spacing along the
+/// normal: the outermost cells lie inside the true edge by half a spacing on average where the
+/// edge runs along the scan's lattice of cells (one line of cells at a random phase), by next to
+/// nothing where it runs across it (cells at every phase); boxes stand at any yaw.
+std::optional<double> Extreme(std::vector<double> t, double min_t, double spacing) {
   if (t.empty()) return std::nullopt;
   std::sort(t.begin(), t.end());
-  const double v = t[t.size() - 1 - t.size() / 100];
-  if (!(v > min_t)) return std::nullopt;
-  return v;
+  const double edge = t[t.size() - 1 - t.size() / 100] + 0.25 * spacing;
+  if (!(edge > min_t)) return std::nullopt;
+  return edge;
 }
 
 std::vector<double> Project(const std::vector<Vector3d>& points, const Vector3d& n, double sign) {
@@ -57,12 +64,126 @@ std::vector<double> Project(const std::vector<Vector3d>& points, const Vector3d&
 /// Extent [lo, hi] along n of a pair whose visible face is at a, the hidden one voted among the
 /// edge points; into = +1 when the box lies on the side n points to from the visible face.
 std::optional<std::pair<double, double>> HiddenExtent(const std::vector<Vector3d>& edges,
-                                                      const Vector3d& n, double a, double into) {
+                                                      const Vector3d& n, double a, double into,
+                                                      double spacing) {
   const std::vector<double> t = Project(edges, n, into);
-  const std::optional<double> v = Extreme(t, into * a + kMinDepthM);
+  const std::optional<double> v = Extreme(t, into * a + kMinDepthM, spacing);
   if (!v) return std::nullopt;
   const double b = into * *v;
   return std::make_pair(std::min(a, b), std::max(a, b));
+}
+
+/// The edge points that place a hidden side face: the top face's, and a side face's from its
+/// upper part only (above the middle of the box's height). Near the table, a side face's region
+/// can take in table cells along the line where its plane meets the table, beyond the box's
+/// corner (they satisfy its plane); the top and the upper parts of the sides have no such cells.
+std::vector<Vector3d> HorizontalEdges(const std::vector<Vector3d>& top,
+                                      const std::vector<Vector3d>& side) {
+  double top_z = 0;
+  for (const Vector3d& p : top) top_z += p.z();
+  top_z /= std::max<size_t>(top.size(), 1);
+  std::vector<Vector3d> out = top;
+  for (const Vector3d& p : side) {
+    if (p.z() > 0.5 * top_z) out.push_back(p);
+  }
+  return out;
+}
+
+/// Both ends along n of a pair whose faces are both hidden: the edge points' robust extremes.
+std::optional<std::pair<double, double>> BothExtremes(const std::vector<Vector3d>& edges,
+                                                      const Vector3d& n, double spacing) {
+  const std::optional<double> hi = Extreme(Project(edges, n, 1.0), -1e9, spacing);
+  const std::optional<double> lo_neg = Extreme(Project(edges, n, -1.0), -1e9, spacing);
+  if (!hi || !lo_neg || *hi + *lo_neg < kMinDepthM) return std::nullopt;
+  return std::make_pair(-*lo_neg, *hi);
+}
+
+/// The spacing of a face's range cells along n: the scan samples a face on a lattice (image rows
+/// by stripe positions, about 1.5-3 mm apart on the workspace's faces); the larger of the median
+/// row and column steps along n.
+double Spacing(const segment::SegmentResult& s, const scan::RangeImage& range, int id,
+               const Vector3d& n) {
+  std::vector<double> along_rows, along_cols;
+  for (int r = 0; r < s.rows; ++r) {
+    for (int c = 0; c < s.cols; ++c) {
+      if (s.labels[r * s.cols + c] != id) continue;
+      const Vector3d& p = range.at(r, c).p_W;
+      if (c + 1 < s.cols && s.labels[r * s.cols + c + 1] == id) {
+        along_cols.push_back(std::abs(n.dot(range.at(r, c + 1).p_W - p)));
+      }
+      if (r + 1 < s.rows && s.labels[(r + 1) * s.cols + c] == id) {
+        along_rows.push_back(std::abs(n.dot(range.at(r + 1, c).p_W - p)));
+      }
+    }
+  }
+  const auto median = [](std::vector<double>& v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  return std::max(median(along_rows), median(along_cols));
+}
+
+/// The direction of one of the top face's outline edges (horizontal, unit, in W) when no side
+/// face is seen: the minimum-area rectangle around the top's points in its plane, each of its
+/// sides then refined by a line through the edge points along it. nullopt when the outline is
+/// not a rectangle (its convex hull fills less than min_fill of the rectangle) or a side is under
+/// kMinEdgeM: a sliver or a partly hidden top gives no box.
+std::optional<Vector3d> TopOutlineAxis(const std::vector<Vector3d>& top_points,
+                                       const std::vector<Vector3d>& top_edges, const Vector3d& n1,
+                                       double min_fill) {
+  if (top_points.size() < 3) return std::nullopt;
+  Vector3d e1 = n1.cross(Vector3d::UnitY());
+  if (e1.norm() < 0.5) e1 = n1.cross(Vector3d::UnitX());
+  e1.normalize();
+  const Vector3d e2 = n1.cross(e1);
+  const auto plane_mm = [&](const Vector3d& p) {
+    return cv::Point2f(static_cast<float>(1e3 * e1.dot(p)), static_cast<float>(1e3 * e2.dot(p)));
+  };
+  std::vector<cv::Point2f> points;
+  for (const Vector3d& p : top_points) points.push_back(plane_mm(p));
+  std::vector<cv::Point2f> hull;
+  cv::convexHull(points, hull);
+  const cv::RotatedRect rect = cv::minAreaRect(hull);
+  if (std::min(rect.size.width, rect.size.height) < 1e3 * kMinEdgeM) return std::nullopt;
+  if (cv::contourArea(hull) < min_fill * rect.size.area()) return std::nullopt;
+  double theta = DegToRad(rect.angle);
+  // Refinement: each side's edge points (within 3 mm of it) get a line; the sides' directions,
+  // taken modulo 90 deg, are averaged by their point counts.
+  cv::Point2f corners[4];
+  rect.points(corners);
+  std::vector<cv::Point2f> edges;
+  for (const Vector3d& p : top_edges) edges.push_back(plane_mm(p));
+  double sum_delta = 0, sum_w = 0;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector2d a(corners[k].x, corners[k].y),
+        b(corners[(k + 1) % 4].x, corners[(k + 1) % 4].y);
+    const Eigen::Vector2d u = (b - a).normalized(), m(-u.y(), u.x());
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    std::vector<Eigen::Vector2d> near;
+    for (const cv::Point2f& q : edges) {
+      const Eigen::Vector2d d = Eigen::Vector2d(q.x, q.y) - a;
+      const double along = d.dot(u);
+      if (std::abs(d.dot(m)) < 3.0 && along > 0 && along < (b - a).norm()) {
+        near.push_back(Eigen::Vector2d(q.x, q.y));
+        mean += near.back();
+      }
+    }
+    if (near.size() < 5) continue;
+    mean /= static_cast<double>(near.size());
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (const Eigen::Vector2d& q : near) cov += (q - mean) * (q - mean).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+    const Eigen::Vector2d dir = es.eigenvectors().col(1);
+    // Angle of the fitted line against the rectangle's side, in (-90, 90] deg -> (-45, 45].
+    double delta = std::atan2(u.x() * dir.y() - u.y() * dir.x(), u.dot(dir));
+    while (delta > kPi / 4) delta -= kPi / 2;
+    while (delta <= -kPi / 4) delta += kPi / 2;
+    sum_delta += near.size() * delta;
+    sum_w += static_cast<double>(near.size());
+  }
+  if (sum_w > 0) theta += sum_delta / sum_w;
+  return (std::cos(theta) * e1 + std::sin(theta) * e2).normalized();
 }
 
 }  // namespace
@@ -93,31 +214,51 @@ std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
       if (side2 == nullptr || r->cells > side2->cells) side2 = r;
     }
   }
-  if (top == nullptr || side2 == nullptr) return std::nullopt;
-  if (top->cells < config.min_face_cells || side2->cells < config.min_face_cells) {
-    return std::nullopt;
-  }
+  if (top == nullptr || top->cells < config.min_face_cells) return std::nullopt;
+  if (side2 != nullptr && side2->cells < config.min_face_cells) side2 = nullptr;
 
-  // Orthonormal normals: n1 up from the top fit, n2 from A2 made perpendicular, n3 = n1 x n2.
+  std::vector<Vector3d> edges_top, edges2, edges3;
+  AppendEdgePoints(s, range, top->id, &edges_top);
+  // Only edge points on the top's plane: where the top's far edge occludes the table, a stripe
+  // cut by the edge gives points off the plane and, along it, beyond the edge.
+  const double off_plane = std::max(kMaxEdgeOffPlaneM, 3.0 * std::sqrt(top->residual_m2));
+  std::erase_if(edges_top, [&](const Vector3d& p) {
+    return std::abs(top->normal_W.dot(p - top->centroid_W)) > off_plane;
+  });
+
+  // Orthonormal normals: n1 up from the top fit, n2 from A2 made perpendicular (or, with no side
+  // seen, along the top's outline), n3 = n1 x n2.
   Vector3d n1 = top->normal_W.normalized();
   if (n1.z() < 0) n1 = -n1;
-  Vector3d n2 = side2->normal_W - side2->normal_W.dot(n1) * n1;
-  if (n2.norm() < 1e-6) return std::nullopt;
-  n2.normalize();
+  Vector3d n2;
+  if (side2 != nullptr) {
+    n2 = side2->normal_W - side2->normal_W.dot(n1) * n1;
+    if (n2.norm() < 1e-6) return std::nullopt;
+    n2.normalize();
+  } else {
+    if (top->cells < config.min_top_only_cells) return std::nullopt;
+    std::vector<Vector3d> top_points;
+    for (int i = 0; i < s.rows * s.cols; ++i) {
+      if (s.labels[i] == top->id) top_points.push_back(range.at(i / s.cols, i % s.cols).p_W);
+    }
+    const std::optional<Vector3d> axis =
+        TopOutlineAxis(top_points, edges_top, n1, config.min_top_fill);
+    if (!axis) return std::nullopt;
+    n2 = *axis;
+  }
   const Vector3d n3 = n1.cross(n2);
 
   // A3: the largest other near-vertical region nearly perpendicular to A2 (and so to A1).
   const segment::PlaneRegion* side3 = nullptr;
   for (const segment::PlaneRegion* r : regions) {
+    if (side2 == nullptr) break;
     if (r == top || r == side2 || std::abs(r->normal_W.z()) >= sin_tol) continue;
     if (r->cells < config.min_face_cells) continue;
     if (std::abs(r->normal_W.normalized().dot(n2)) >= sin_tol) continue;
     if (side3 == nullptr || r->cells > side3->cells) side3 = r;
   }
 
-  std::vector<Vector3d> edges_top, edges2, edges3;
-  AppendEdgePoints(s, range, top->id, &edges_top);
-  AppendEdgePoints(s, range, side2->id, &edges2);
+  if (side2 != nullptr) AppendEdgePoints(s, range, side2->id, &edges2);
   if (side3 != nullptr) AppendEdgePoints(s, range, side3->id, &edges3);
 
   // Pair 1: top at n1 . c_top, bottom on the table z = 0 below the top's centroid.
@@ -126,28 +267,30 @@ std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
 
   // Pair 2: A2 visible; B2 voted over the edges of A1 and A3, beyond A2 away from the cameras
   // (the box's interior is on the top's side of A2).
-  const double a2 = n2.dot(side2->centroid_W);
-  const double into2 = n2.dot(top->centroid_W - side2->centroid_W) >= 0 ? 1.0 : -1.0;
-  std::vector<Vector3d> edges_for_b2 = edges_top;
-  edges_for_b2.insert(edges_for_b2.end(), edges3.begin(), edges3.end());
-  const auto ext2 = HiddenExtent(edges_for_b2, n2, a2, into2);
+  // The top's cell spacing along n2 and n3, for placing hidden faces (see Extreme).
+  const double spacing2 = Spacing(s, range, top->id, n2);
+  const double spacing3 = Spacing(s, range, top->id, n3);
+
+  // With no side seen, both ends are the top's edge points' extremes.
+  std::optional<std::pair<double, double>> ext2;
+  if (side2 != nullptr) {
+    const double a2 = n2.dot(side2->centroid_W);
+    const double into2 = n2.dot(top->centroid_W - side2->centroid_W) >= 0 ? 1.0 : -1.0;
+    ext2 = HiddenExtent(HorizontalEdges(edges_top, edges3), n2, a2, into2, spacing2);
+  } else {
+    ext2 = BothExtremes(edges_top, n2, spacing2);
+  }
   if (!ext2) return std::nullopt;
 
   // Pair 3: over the edges of A1 and A2.
-  std::vector<Vector3d> edges_for_3 = edges_top;
-  edges_for_3.insert(edges_for_3.end(), edges2.begin(), edges2.end());
+  const std::vector<Vector3d> edges_for_3 = HorizontalEdges(edges_top, edges2);
   std::optional<std::pair<double, double>> ext3;
   if (side3 != nullptr) {
     const double a3 = n3.dot(side3->centroid_W);
     const double into3 = n3.dot(top->centroid_W - side3->centroid_W) >= 0 ? 1.0 : -1.0;
-    ext3 = HiddenExtent(edges_for_3, n3, a3, into3);
+    ext3 = HiddenExtent(edges_for_3, n3, a3, into3, spacing3);
   } else {
-    // Both extremes from the vote, each among the edge points near its end of the spread.
-    const std::vector<double> t = Project(edges_for_3, n3, 1.0);
-    const std::vector<double> neg = Project(edges_for_3, n3, -1.0);
-    const std::optional<double> hi = Extreme(t, -1e9);
-    const std::optional<double> lo_neg = Extreme(neg, -1e9);
-    if (hi && lo_neg && *hi + *lo_neg >= kMinDepthM) ext3 = std::make_pair(-*lo_neg, *hi);
+    ext3 = BothExtremes(edges_for_3, n3, spacing3);
   }
   if (!ext3) return std::nullopt;
 
@@ -171,8 +314,11 @@ std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
     box.vertices_W[k] = box.X_WO * corner_O;
   }
   box.regions.push_back(top->id);
-  box.regions.push_back(side2->id);
-  box.points = top->cells + side2->cells;
+  box.points = top->cells;
+  if (side2 != nullptr) {
+    box.regions.push_back(side2->id);
+    box.points += side2->cells;
+  }
   if (side3 != nullptr) {
     box.regions.push_back(side3->id);
     box.points += side3->cells;

@@ -36,23 +36,34 @@ struct BoxFitConfig {
   /// The top face and the largest side need at least this many range cells; a smaller second
   /// side is ignored (treated as hidden).
   double min_face_cells = 30;
+  /// With no side face seen (the sides edge-on to the cameras), a top of at least this many
+  /// cells whose convex hull fills at least min_top_fill of its minimum-area rectangle gives the
+  /// box alone: the bottom is the table.
+  int min_top_only_cells = 200;
+  double min_top_fill = 0.85;
 };
 
 /// Fits a box to one object group (paper 5.2). The largest region of the group within
 /// max_face_angle_deg of horizontal is the top A1 (normal n1); the largest near-vertical region
 /// is the side A2, and the largest other near-vertical region nearly perpendicular to A2 (if any)
 /// is A3. n2 is A2's normal made perpendicular to n1, n3 = n1 x n2. The visible faces' distances
-/// along their normals come from their centroids. Each hidden face B_i lies at the edge points'
-/// robust extreme along n_i (their 99th percentile; edge points: cells of the other visible faces
-/// with a 4-neighbour that is invalid, outside the image or labelled differently), at least 1 cm
-/// beyond A_i on the side away from the cameras. The paper places it by a vote for the densest
-/// line of edge points; the scanner's ragged face ends (the stripe crosses them at a slant) make
-/// that line fall 5-8 mm inside the true edge, so the extreme is used. With A3 hidden, both ends
-/// along n3 are such extremes. The bottom is the table,
-/// z = 0. Returns nullopt (never a wrong box) when there is no top face or no side face, the top
-/// or A2 has fewer than min_face_cells cells, no edge point lies beyond a visible face, or an edge
-/// of the result is shorter than 1 cm or longer than 0.5 m. s must come from segment::SegmentPlanes
-/// on range (aborts on a size mismatch); unknown region ids are ignored.
+/// along their normals come from their centroids. Each hidden side face B_i lies at the edge
+/// points' robust extreme along n_i (their 99th percentile, plus a quarter of the top's cell
+/// spacing along n_i: the outermost cells lie inside the true edge), at least 1 cm beyond A_i on
+/// the side away from the cameras; with A3 hidden, both ends along n3 are such extremes. Edge
+/// points are the cells of the top (within max(2 mm, 3 sigma) of its plane) and of the sides' upper
+/// halves with a 4-neighbour that is invalid, outside the image or labelled differently: near the
+/// table a side's region can take in table cells along the line where its plane meets the table.
+/// The paper places a hidden face by a vote for the densest line of edge points; the scanner's
+/// ragged face ends (the stripe crosses them at a slant) make that line fall 5-8 mm inside the true
+/// edge, so the extreme is used. The bottom is the table, z = 0. With no side face of
+/// min_face_cells (the sides seen edge-on), the top alone gives the box when it has
+/// min_top_only_cells and a rectangular outline (see BoxFitConfig): n2 along the outline, both ends
+/// along n2 and n3 from the edge points' extremes. Returns nullopt (never a wrong box) when there
+/// is no top face of min_face_cells, no side face and a top too small or not rectangular (a sliver,
+/// a partly hidden top), no edge point lies beyond a visible face, or an edge of the result is
+/// shorter than 1 cm or longer than 0.5 m. s must come from segment::SegmentPlanes on range (aborts
+/// on a size mismatch); unknown region ids are ignored.
 std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
                                const std::vector<int>& object_regions,
                                const scan::RangeImage& range, const BoxFitConfig& config = {});

@@ -156,18 +156,49 @@ TEST(FitBox, RotatedTopAndOneSide) {
   EXPECT_LT((box->X_WO.translation() - Vector3d(0.30, -0.02, 0.05)).norm(), 0.003);
 }
 
-TEST(FitBox, TopOnlyIsNoBox) {
-  // A lone top face over the table: GroupObjects removes it as a second floor, so fit the
-  // region directly.
-  const RangeImage img = BoxScene(0.28, 0.005, 0.0, kSize, 0.005, Sides::kNone);
+// The top's region alone (GroupObjects would remove a lone top over the table as a second floor
+// only if it were lower than the table; fit the region directly).
+const segment::PlaneRegion& Top(const segment::SegmentResult& s) {
+  const segment::PlaneRegion* top = &s.regions[0];
+  for (const auto& r : s.regions) {
+    if (r.centroid_W.z() > top->centroid_W.z()) top = &r;
+  }
+  return *top;
+}
+
+TEST(FitBox, TopOnlyGivesTheBoxFromItsOutline) {
+  // The sides edge-on to the cameras: the top's rectangle and the table give the box.
+  const double yaw = DegToRad(30);
+  const RangeImage img = BoxScene(0.28, 0.005, yaw, kSize, 0.0025, Sides::kNone);
   const segment::SegmentResult s = segment::SegmentPlanes(img);
   ASSERT_EQ(s.regions.size(), 2u);
-  const segment::PlaneRegion& top =
-      s.regions[0].centroid_W.z() > s.regions[1].centroid_W.z() ? s.regions[0] : s.regions[1];
-  EXPECT_NEAR(top.centroid_W.z(), 0.1, 1e-9);
-  EXPECT_FALSE(FitBox(s, {top.id}, img).has_value());
-  std::vector<int> both = {s.regions[0].id, s.regions[1].id};
-  EXPECT_FALSE(FitBox(s, both, img).has_value());  // two horizontal regions, still no side
+  const std::optional<BoxModel> box = FitBox(s, {Top(s).id}, img);
+  ASSERT_TRUE(box.has_value());
+  // The outermost samples lie half a step (1.25 mm) inside each edge.
+  ExpectSize(*box, 0.06, 0.09, 0.10, 0.003);
+  EXPECT_NEAR(YawErrorMod90Deg(*box, 30.0), 0.0, 0.5);
+  EXPECT_LT((box->X_WO.translation() - Vector3d(0.28, 0.005, 0.05)).norm(), 0.002);
+  ExpectUpAndConsistent(*box);
+  EXPECT_EQ(box->regions, std::vector<int>{Top(s).id});
+}
+
+TEST(FitBox, SmallOrNonRectangularTopAloneIsNoBox) {
+  // 10 x 15 cells: under min_top_only_cells.
+  const RangeImage small = BoxScene(0.28, 0.005, 0.0, kSize, 0.006, Sides::kNone);
+  const segment::SegmentResult s1 = segment::SegmentPlanes(small);
+  EXPECT_FALSE(FitBox(s1, {Top(s1).id}, small).has_value());
+  // A triangle of a top (half of it cut away along its diagonal): its hull fills half of the
+  // rectangle around it.
+  RangeImage triangle = BoxScene(0.28, 0.005, 0.0, kSize, 0.0025, Sides::kNone);
+  const int nx = 24, ny = 36, cf = 5 + nx;
+  for (int r = 0; r < nx; ++r) {
+    for (int c = 0; c < ny; ++c) {
+      if (c * nx > r * ny) triangle.at(r, cf + c).valid = false;
+    }
+  }
+  const segment::SegmentResult s2 = segment::SegmentPlanes(triangle);
+  EXPECT_GE(Top(s2).cells, 200);
+  EXPECT_FALSE(FitBox(s2, {Top(s2).id}, triangle).has_value());
 }
 
 TEST(FitBox, NoisyBoxWithinFourMillimetres) {
