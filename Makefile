@@ -37,8 +37,8 @@ build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
 run: build
-	./$(BUILD)/hgrasp scan $(SCENARIO) --out $(OUT)
-	@echo "make run: $(OUT)/range.png (colour and range), range.ply, report.json"
+	./$(BUILD)/hgrasp model $(SCENARIO) --out $(OUT)
+	@echo "make run: $(OUT)/models.png (the boxes found), segments.png, range.png, models.obj, report.json"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)

@@ -43,4 +43,15 @@ struct ScanOptions {
 /// `hgrasp scan`: one laser sweep: range.ply, range.png and report.json.
 int Scan(const ScanOptions& options);
 
+struct ModelOptions {
+  std::string scenario;
+  std::string out_dir;
+  CalibrationFiles files;
+};
+
+/// `hgrasp model`: a scan, its planar segmentation and the boxes fitted to it: range.ply,
+/// range.png, segments.png, models.png, models.obj (+ .mtl, textures) and report.json with the
+/// boxes and the target.
+int Model(const ModelOptions& options);
+
 }  // namespace hgrasp::app

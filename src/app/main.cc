@@ -46,6 +46,16 @@ int main(int argc, char** argv) {
                      "light-plane triangulation from the left camera alone, no stereo validation "
                      "(for comparison)");
 
+  hgrasp::app::ModelOptions model;
+  CLI::App* cmd_model = app.add_subcommand(
+      "model",
+      "Scan, segment into planes and fit boxes with textures and colour: range.ply, range.png, "
+      "segments.png, models.png, models.obj, report.json");
+  cmd_model->add_option("scenario", model.scenario, "scenario YAML file")->required();
+  cmd_model->add_option("--out", model.out_dir, "output directory")->required();
+  cmd_model->add_option("--cameras", model.files.cameras, "camera intrinsics YAML");
+  cmd_model->add_option("--laser", model.files.laser, "laser calibration YAML");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -56,6 +66,7 @@ int main(int argc, char** argv) {
     if (*cmd_render) return hgrasp::app::Render(render);
     if (*cmd_calibrate_laser) return hgrasp::app::CalibrateLaser(calibrate);
     if (*cmd_scan) return hgrasp::app::Scan(scan);
+    if (*cmd_model) return hgrasp::app::Model(model);
   } catch (const hgrasp::InputError& e) {
     std::fprintf(stderr, "hgrasp: %s\n", e.what());
     return 2;

@@ -1,0 +1,178 @@
+// `hgrasp model`: scan, segment, fit boxes; the simulator's ground truth added to the report
+// (never given to the pipeline).
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "app/commands.h"
+#include "app/pictures.h"
+#include "common/paths.h"
+#include "model/box_fit.h"
+#include "model/colour.h"
+#include "model/obj_io.h"
+#include "model/scene_model.h"
+#include "model/texture.h"
+#include "robot/calibration.h"
+#include "robot/head_kinematics.h"
+#include "scan/range_io.h"
+#include "scan/scanner.h"
+#include "segment/segment.h"
+#include "sim/box_truth.h"
+#include "sim/scenario.h"
+#include "sim/sim_devices.h"
+#include "sim/truth.h"
+
+namespace hgrasp::app {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+nlohmann::json Vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json Mat(const Eigen::Matrix3d& R) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i) rows.push_back({R(i, 0), R(i, 1), R(i, 2)});
+  return rows;
+}
+
+}  // namespace
+
+int Model(const ModelOptions& o) {
+  const auto t0 = Clock::now();
+  const sim::Scenario scenario = sim::LoadScenario(o.scenario);
+  const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
+  const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
+  const auto head = robot::HeadKinematics::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
+  sim::SimRobot robot(scenario);
+  device::RobotDevices dev = robot.TakeDevices();
+  scan::Scanner scanner(head, cameras, laser);
+
+  auto t = Clock::now();
+  const scan::ScanResult scan = scanner.Scan(dev, {});
+  const double scan_s = Seconds(t);
+  device::HeadState head_state;
+  dev.head->Read(&head_state);
+
+  t = Clock::now();
+  const model::SceneModel scene = model::ModelScene(scan.range);
+  const double model_s = Seconds(t);
+  const std::vector<model::BoxModel>& boxes = scene.boxes;
+  const std::vector<model::ColourSummary>& colours = scene.colours;
+
+  // The target: by colour, or by a name through its colour word.
+  std::optional<int> target;
+  std::string failure;
+  if (scenario.task) {
+    const std::optional<std::string_view> colour =
+        scenario.task->target_color.empty()
+            ? model::ColourOfName(scenario.task->target_name)
+            : std::optional<std::string_view>(scenario.task->target_color);
+    if (!colour) {
+      failure = "target name '" + scenario.task->target_name +
+                "' names no colour; the robot knows objects by their colour";
+    } else {
+      target = model::ChooseByColour(colours, *colour);
+      if (!target) failure = "no " + std::string(*colour) + " box found";
+    }
+  }
+  if (boxes.empty()) failure = "no box found";
+
+  nlohmann::json report;
+  report["scenario"] = scenario.name;
+  report["seed"] = scenario.seed;
+  report["range"] = {{"points", scan.points}, {"rejected", scan.rejected}};
+  nlohmann::json jboxes = nlohmann::json::array();
+  for (const model::BoxModel& b : boxes) {
+    const model::ColourSummary& colour = colours[jboxes.size()];
+    jboxes.push_back({{"center_W", Vec(b.X_WO.translation())},
+                      {"R_WO", Mat(b.X_WO.linear())},
+                      {"size", Vec(b.size_O)},
+                      {"color_rgb", {colour.rgb.x(), colour.rgb.y(), colour.rgb.z()}},
+                      {"color_name", std::string(colour.name())},
+                      {"color_histogram", colour.histogram},
+                      {"points", b.points}});
+  }
+  report["boxes"] = jboxes;
+  report["ok"] = failure.empty();
+  report["failure"] = failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure);
+  report["target"] = target ? nlohmann::json(*target) : nlohmann::json(nullptr);
+  report["timing_s"] = {{"scan", scan_s},
+                        {"segment", scene.segment_s},
+                        {"model", scene.model_s},
+                        {"total", Seconds(t0)}};
+
+  // Ground truth: each true object against the fitted box nearest to it.
+  nlohmann::json truth = sim::TruthJson(robot.world(), robot.rig(), {});
+  nlohmann::json matches = nlohmann::json::array();
+  for (const sim::SimObject& obj : robot.world().objects()) {
+    const Pose3 X_WO = robot.world().BodyPose(obj.body);
+    int best = -1;
+    double best_d = 1e9;
+    for (size_t k = 0; k < boxes.size(); ++k) {
+      const double d = (boxes[k].X_WO.translation() - X_WO.translation()).norm();
+      if (d < best_d) best_d = d, best = static_cast<int>(k);
+    }
+    nlohmann::json m = {{"object", obj.spec.name},
+                        {"box", best < 0 ? nlohmann::json(nullptr) : nlohmann::json(best)}};
+    if (best >= 0) {
+      const sim::BoxError e =
+          sim::CompareBox(X_WO, obj.spec.size_O, boxes[best].X_WO, boxes[best].size_O);
+      m["center_error_m"] = e.center_m;
+      m["edge_error_m"] = Vec(e.edge_m);
+      m["yaw_error_deg"] = RadToDeg(e.yaw_rad);
+      spdlog::info(
+          "  {}: box {} ({}) centre {:.1f} mm, edges {:.1f} {:.1f} {:.1f} mm, yaw {:.2f} deg",
+          obj.spec.name, best, colours[best].name(), 1e3 * e.center_m, 1e3 * e.edge_m.x(),
+          1e3 * e.edge_m.y(), 1e3 * e.edge_m.z(), RadToDeg(e.yaw_rad));
+    } else {
+      spdlog::info("  {}: no box", obj.spec.name);
+    }
+    matches.push_back(m);
+  }
+  truth["boxes"] = matches;
+  report["truth"] = truth;
+
+  fs::create_directories(o.out_dir);
+  const fs::path out(o.out_dir);
+  scan::WritePly(scan.range, (out / "range.ply").string());
+  scan::WriteRangePng(scan.range, (out / "range.png").string());
+  const PinholeCamera camera = cameras.left;
+  WritePng(SegmentsPicture(scene.segments, scene.groups, scan.range, camera),
+           (out / "segments.png").string());
+  std::vector<cv::Vec3b> colours_bgr;
+  std::vector<Eigen::Vector3f> colours_rgb;
+  std::vector<std::string> labels;
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const Eigen::Vector3f c = 255.0f * colours[i].rgb;
+    colours_bgr.emplace_back(cv::saturate_cast<uchar>(c.z()), cv::saturate_cast<uchar>(c.y()),
+                             cv::saturate_cast<uchar>(c.x()));
+    colours_rgb.push_back(colours[i].rgb);
+    labels.push_back(std::to_string(i) + " " + std::string(colours[i].name()));
+  }
+  const Pose3 X_CW = head.X_WC(0, head_state.q).inverse();
+  WritePng(ModelsPicture(scan.ambient_left, camera, X_CW, boxes, scene.textures, colours_bgr,
+                         labels, target.value_or(-1)),
+           (out / "models.png").string());
+  model::WriteObj(boxes, scene.textures, colours_rgb, out.string());
+  std::ofstream(out / "report.json") << report.dump(2) << "\n";
+  spdlog::info(
+      "model: {} points, {} regions, {} objects, {} boxes ({} not fitted), target {}; scan "
+      "{:.2f} s, segment + model {:.1f} ms, total {:.2f} s; wrote {}",
+      scan.points, scene.segments.regions.size(), scene.groups.objects.size(), boxes.size(),
+      scene.unfitted, target ? std::to_string(*target) : "none", scan_s, 1e3 * model_s, Seconds(t0),
+      o.out_dir);
+  if (!failure.empty()) spdlog::warn("model: {}", failure);
+  return failure.empty() ? 0 : 1;
+}
+
+}  // namespace hgrasp::app
