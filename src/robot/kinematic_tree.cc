@@ -196,6 +196,19 @@ bool KinematicTree::IsMimic(const std::string& joint) const {
   return MovableJoint(joint).master >= 0;
 }
 
+Eigen::Vector3d KinematicTree::Axis(const std::string& joint) const {
+  return MovableJoint(joint).axis;
+}
+
+std::string KinematicTree::ChildLink(const std::string& joint) const {
+  const Joint& j = MovableJoint(joint);
+  for (const Link& link : links_) {
+    if (link.parent_joint >= 0 && &joints_[link.parent_joint] == &j) return link.name;
+  }
+  HGRASP_DEMAND(false);  // every joint has a child link
+  return {};
+}
+
 KinematicTree::JointLimits KinematicTree::Limits(const std::string& joint) const {
   return MovableJoint(joint).limits;
 }

@@ -55,6 +55,14 @@ class KinematicTree {
   /// @throws hgrasp::InputError when `joint` is not a movable joint of this tree.
   bool IsMimic(const std::string& joint) const;
 
+  /// Unit axis of a movable joint in its own (= its child link's) frame.
+  /// @throws hgrasp::InputError when `joint` is not a movable joint of this tree.
+  Eigen::Vector3d Axis(const std::string& joint) const;
+
+  /// The child link of a movable joint (the link whose frame is the joint's frame).
+  /// @throws hgrasp::InputError when `joint` is not a movable joint of this tree.
+  std::string ChildLink(const std::string& joint) const;
+
   /// Limits of a movable joint.
   /// @throws hgrasp::InputError when `joint` is not a movable joint of this tree.
   JointLimits Limits(const std::string& joint) const;
