@@ -37,8 +37,8 @@ build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
 run: build
-	./$(BUILD)/hgrasp model $(SCENARIO) --out $(OUT)
-	@echo "make run: $(OUT)/models.png (the boxes found), segments.png, range.png, models.obj, report.json"
+	./$(BUILD)/hgrasp plan $(SCENARIO) --out $(OUT)
+	@echo "make run: $(OUT)/grasp.png (the planned grasp), models.png, segments.png, range.png, models.obj, report.json"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)

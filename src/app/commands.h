@@ -54,4 +54,8 @@ struct ModelOptions {
 /// boxes and the target.
 int Model(const ModelOptions& options);
 
+/// `hgrasp plan`: `hgrasp model`, then the grasp of the target (paper 5.3): grasp.png and the
+/// grasp in report.json; exit 1 when no grasp is reachable.
+int Plan(const ModelOptions& options);
+
 }  // namespace hgrasp::app

@@ -35,26 +35,36 @@ int main(int argc, char** argv) {
       ->required();
   cmd_calibrate_laser->add_option("--cameras", calibrate.files.cameras, "camera intrinsics YAML");
 
+  // The commands that scan a scenario share its arguments: scenario, --out, calibration files.
+  auto scene_command = [&](const char* name, const char* what, std::string* scenario,
+                           std::string* out_dir, hgrasp::app::CalibrationFiles* files) {
+    CLI::App* cmd = app.add_subcommand(name, what);
+    cmd->add_option("scenario", *scenario, "scenario YAML file")->required();
+    cmd->add_option("--out", *out_dir, "output directory")->required();
+    cmd->add_option("--cameras", files->cameras, "camera intrinsics YAML");
+    cmd->add_option("--laser", files->laser, "laser calibration YAML");
+    return cmd;
+  };
+
   hgrasp::app::ScanOptions scan;
-  CLI::App* cmd_scan = app.add_subcommand(
-      "scan", "One stereo laser-stripe sweep: range.ply, range.png, report.json");
-  cmd_scan->add_option("scenario", scan.scenario, "scenario YAML file")->required();
-  cmd_scan->add_option("--out", scan.out_dir, "output directory")->required();
-  cmd_scan->add_option("--cameras", scan.files.cameras, "camera intrinsics YAML");
-  cmd_scan->add_option("--laser", scan.files.laser, "laser calibration YAML");
+  CLI::App* cmd_scan =
+      scene_command("scan", "One stereo laser-stripe sweep: range.ply, range.png, report.json",
+                    &scan.scenario, &scan.out_dir, &scan.files);
   cmd_scan->add_flag("--single-camera", scan.single_camera,
                      "light-plane triangulation from the left camera alone, no stereo validation "
                      "(for comparison)");
 
   hgrasp::app::ModelOptions model;
-  CLI::App* cmd_model = app.add_subcommand(
+  CLI::App* cmd_model = scene_command(
       "model",
       "Scan, segment into planes and fit boxes with textures and colour: range.ply, range.png, "
-      "segments.png, models.png, models.obj, report.json");
-  cmd_model->add_option("scenario", model.scenario, "scenario YAML file")->required();
-  cmd_model->add_option("--out", model.out_dir, "output directory")->required();
-  cmd_model->add_option("--cameras", model.files.cameras, "camera intrinsics YAML");
-  cmd_model->add_option("--laser", model.files.laser, "laser calibration YAML");
+      "segments.png, models.png, models.obj, report.json",
+      &model.scenario, &model.out_dir, &model.files);
+
+  hgrasp::app::ModelOptions plan;
+  CLI::App* cmd_plan = scene_command(
+      "plan", "As `model`, then the grasp of the target: grasp.png, the grasp in report.json",
+      &plan.scenario, &plan.out_dir, &plan.files);
 
   try {
     app.parse(argc, argv);
@@ -67,6 +77,7 @@ int main(int argc, char** argv) {
     if (*cmd_calibrate_laser) return hgrasp::app::CalibrateLaser(calibrate);
     if (*cmd_scan) return hgrasp::app::Scan(scan);
     if (*cmd_model) return hgrasp::app::Model(model);
+    if (*cmd_plan) return hgrasp::app::Plan(plan);
   } catch (const hgrasp::InputError& e) {
     std::fprintf(stderr, "hgrasp: %s\n", e.what());
     return 2;

@@ -12,11 +12,13 @@
 #include "app/commands.h"
 #include "app/pictures.h"
 #include "common/paths.h"
+#include "grasp/grasp_planner.h"
 #include "model/box_fit.h"
 #include "model/colour.h"
 #include "model/obj_io.h"
 #include "model/scene_model.h"
 #include "model/texture.h"
+#include "robot/arm_kinematics.h"
 #include "robot/calibration.h"
 #include "robot/head_kinematics.h"
 #include "scan/range_io.h"
@@ -45,9 +47,8 @@ nlohmann::json Mat(const Eigen::Matrix3d& R) {
   return rows;
 }
 
-}  // namespace
-
-int Model(const ModelOptions& o) {
+// `hgrasp model`, and with `plan` also `hgrasp plan`.
+int LookAndPlan(const ModelOptions& o, bool plan) {
   const auto t0 = Clock::now();
   const sim::Scenario scenario = sim::LoadScenario(o.scenario);
   const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
@@ -87,6 +88,19 @@ int Model(const ModelOptions& o) {
   }
   if (boxes.empty()) failure = "no box found";
 
+  // The grasp (paper 5.3): both arms, their kinematics from the URDF.
+  std::optional<grasp::GraspPlan> grasp_plan;
+  double plan_s = 0;
+  if (plan && failure.empty() && target) {
+    const auto tree = robot::KinematicTree::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
+    const auto left = robot::ArmKinematics::FromTree(tree, "left");
+    const auto right = robot::ArmKinematics::FromTree(tree, "right");
+    t = Clock::now();
+    grasp_plan = grasp::PlanGrasp(boxes, *target, {&left, &right});
+    plan_s = Seconds(t);
+    if (!grasp_plan) failure = "no reachable grasp of box " + std::to_string(*target);
+  }
+
   nlohmann::json report;
   report["scenario"] = scenario.name;
   report["seed"] = scenario.seed;
@@ -110,6 +124,25 @@ int Model(const ModelOptions& o) {
                         {"segment", scene.segment_s},
                         {"model", scene.model_s},
                         {"total", Seconds(t0)}};
+  if (plan) {
+    report["timing_s"]["plan"] = plan_s;
+    if (grasp_plan) {
+      const grasp::GraspPlan& g = *grasp_plan;
+      nlohmann::json q = nlohmann::json::array(), q_pre = nlohmann::json::array();
+      for (int i = 0; i < 6; ++i) q.push_back(g.q[i]), q_pre.push_back(g.q_pre[i]);
+      report["grasp"] = {{"arm", g.side == device::Side::kLeft ? "left" : "right"},
+                         {"p_WE", Vec(g.X_WE.translation())},
+                         {"R_WE", Mat(g.X_WE.linear())},
+                         {"contacts_W", {Vec(g.contacts_W[0]), Vec(g.contacts_W[1])}},
+                         {"q", q},
+                         {"p_WE_pre", Vec(g.X_WE_pre.translation())},
+                         {"q_pre", q_pre},
+                         {"opening", g.opening_m},
+                         {"comfort_deg", RadToDeg(g.comfort_rad)}};
+    } else {
+      report["grasp"] = nullptr;
+    }
+  }
 
   // Ground truth: each true object against the fitted box nearest to it.
   nlohmann::json truth = sim::TruthJson(robot.world(), robot.rig(), {});
@@ -140,6 +173,27 @@ int Model(const ModelOptions& o) {
     matches.push_back(m);
   }
   truth["boxes"] = matches;
+  if (grasp_plan) {
+    // How far each contact lies from the true surface of the object the target box models.
+    const sim::SimObject* object = nullptr;
+    double best_d = 1e9;
+    for (const sim::SimObject& obj : robot.world().objects()) {
+      const double d =
+          (robot.world().BodyPose(obj.body).translation() - boxes[*target].X_WO.translation())
+              .norm();
+      if (d < best_d) best_d = d, object = &obj;
+    }
+    if (object != nullptr) {
+      const Pose3 X_WO = robot.world().BodyPose(object->body);
+      nlohmann::json d = nlohmann::json::array();
+      for (const Eigen::Vector3d& c : grasp_plan->contacts_W) {
+        d.push_back(sim::DistanceToBoxSurface(X_WO, object->spec.size_O, c));
+      }
+      truth["grasp"] = {{"object", object->spec.name}, {"contact_to_surface_m", d}};
+      spdlog::info("  grasp of {}: contacts {:.1f} and {:.1f} mm from its true faces",
+                   object->spec.name, 1e3 * d[0].get<double>(), 1e3 * d[1].get<double>());
+    }
+  }
   report["truth"] = truth;
 
   fs::create_directories(o.out_dir);
@@ -160,9 +214,16 @@ int Model(const ModelOptions& o) {
     labels.push_back(std::to_string(i) + " " + std::string(colours[i].name()));
   }
   const Pose3 X_CW = head.X_WC(0, head_state.q).inverse();
-  WritePng(ModelsPicture(scan.ambient_left, camera, X_CW, boxes, scene.textures, colours_bgr,
-                         labels, target.value_or(-1)),
-           (out / "models.png").string());
+  cv::Mat models = ModelsPicture(scan.ambient_left, camera, X_CW, boxes, scene.textures,
+                                 colours_bgr, labels, target.value_or(-1));
+  WritePng(models, (out / "models.png").string());
+  if (plan) {
+    if (grasp_plan) {
+      DrawHand(&models, camera, X_CW, grasp::HandBoxes(grasp_plan->X_WE, grasp_plan->opening_m, {}),
+               cv::Scalar(40, 40, 255));
+    }
+    WritePng(models, (out / "grasp.png").string());
+  }
   model::WriteObj(boxes, scene.textures, colours_rgb, out.string());
   std::ofstream(out / "report.json") << report.dump(2) << "\n";
   spdlog::info(
@@ -171,8 +232,20 @@ int Model(const ModelOptions& o) {
       scan.points, scene.segments.regions.size(), scene.groups.objects.size(), boxes.size(),
       scene.unfitted, target ? std::to_string(*target) : "none", scan_s, 1e3 * model_s, Seconds(t0),
       o.out_dir);
-  if (!failure.empty()) spdlog::warn("model: {}", failure);
+  if (grasp_plan) {
+    spdlog::info(
+        "plan: {} arm, opening {:.0f} mm, tilt {:.0f} deg, wrist-forearm {:.1f} deg; {:.2f} ms",
+        grasp_plan->side == device::Side::kLeft ? "left" : "right", 1e3 * grasp_plan->opening_m,
+        RadToDeg(grasp_plan->tilt_rad), RadToDeg(grasp_plan->comfort_rad), 1e3 * plan_s);
+  }
+  if (!failure.empty()) spdlog::warn("{}: {}", plan ? "plan" : "model", failure);
   return failure.empty() ? 0 : 1;
 }
+
+}  // namespace
+
+int Model(const ModelOptions& o) { return LookAndPlan(o, false); }
+
+int Plan(const ModelOptions& o) { return LookAndPlan(o, true); }
 
 }  // namespace hgrasp::app

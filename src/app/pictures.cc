@@ -133,6 +133,31 @@ cv::Mat ModelsPicture(const cv::Mat& ambient_bgr, const PinholeCamera& camera, c
   return out;
 }
 
+void DrawHand(cv::Mat* picture, const PinholeCamera& camera, const Pose3& X_CW,
+              const std::array<grasp::OrientedBox, 3>& hand, const cv::Scalar& colour_bgr) {
+  const int k = kPictureScale;
+  for (const grasp::OrientedBox& part : hand) {
+    std::array<std::optional<cv::Point2f>, 8> corners;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d o((c & 1 ? 0.5 : -0.5) * part.size.x(),
+                              (c & 2 ? 0.5 : -0.5) * part.size.y(),
+                              (c & 4 ? 0.5 : -0.5) * part.size.z());
+      if (const auto uv = camera.Project(X_CW * (part.centre + part.R * o))) {
+        corners[c] = cv::Point2f(static_cast<float>(k * uv->x() + 0.5 * (k - 1)),
+                                 static_cast<float>(k * uv->y() + 0.5 * (k - 1)));
+      }
+    }
+    for (int a = 0; a < 8; ++a) {
+      for (const int bit : {1, 2, 4}) {
+        const int b = a | bit;
+        if (b != a && corners[a] && corners[b]) {
+          cv::line(*picture, *corners[a], *corners[b], colour_bgr, 2, cv::LINE_AA);
+        }
+      }
+    }
+  }
+}
+
 void WritePng(const cv::Mat& image, const std::string& path) {
   if (!cv::imwrite(path, image)) throw std::runtime_error("cannot write " + path);
 }

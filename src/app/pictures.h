@@ -8,6 +8,7 @@
 
 #include "common/geometry.h"
 #include "common/pinhole_camera.h"
+#include "grasp/grasp_planner.h"
 #include "model/box_fit.h"
 #include "model/texture.h"
 #include "scan/range_image.h"
@@ -35,6 +36,11 @@ cv::Mat ModelsPicture(const cv::Mat& ambient_bgr, const PinholeCamera& camera, c
                       const std::vector<std::vector<model::FaceTexture>>& textures,
                       const std::vector<cv::Vec3b>& colours_bgr,
                       const std::vector<std::string>& labels, int target_index);
+
+/// Draws the hand's boxes (grasp::HandBoxes) as a wireframe on a picture made by ModelsPicture
+/// (after the paper's Figure 6, its red wireframe hand).
+void DrawHand(cv::Mat* picture, const PinholeCamera& camera, const Pose3& X_CW,
+              const std::array<grasp::OrientedBox, 3>& hand, const cv::Scalar& colour_bgr);
 
 /// Writes a picture as PNG; throws std::runtime_error naming the path on failure.
 void WritePng(const cv::Mat& image, const std::string& path);

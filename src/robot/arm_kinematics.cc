@@ -138,6 +138,13 @@ Eigen::Matrix<double, 6, 6> ArmKinematics::Jacobian(const device::Joint6& q) con
   return J;
 }
 
+Eigen::Vector3d ArmKinematics::ForearmDirection(const device::Joint6& q) const {
+  const Pose3 E12 = Exp(w_[0], r_[0], q[0]) * Exp(w_[1], r_[1], q[1]);
+  const Pose3 E123 = E12 * Exp(w_[2], r_[2], q[2]);
+  const Vector3d w4 = E123.linear() * w_[3];
+  return (E123 * wrist_ - E12 * r_[2]).dot(w4) >= 0.0 ? w4 : Vector3d(-w4);
+}
+
 std::vector<ArmIkSolution> ArmKinematics::Inverse(const Pose3& X_WE) const {
   const Pose3 g = X_WE * M_.inverse();  // e^(xi_1 q_1) ... e^(xi_6 q_6)
   const Vector3d wrist_target = g * wrist_;

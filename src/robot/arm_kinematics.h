@@ -51,6 +51,10 @@ class ArmKinematics {
   /// 3-5 the angular velocity (rad/s), per unit joint rate.
   Eigen::Matrix<double, 6, 6> Jacobian(const device::Joint6& q) const;
 
+  /// Unit direction of the forearm: joint 4's axis, pointing from the elbow (joint 3's axis)
+  /// towards the wrist centre.
+  Eigen::Vector3d ForearmDirection(const device::Joint6& q) const;
+
   /// Every joint configuration (angles in (-pi, pi], joint limits not applied) whose gripper
   /// pose is X_WE: up to 8, none when the pose is out of reach. At a singularity (e.g. the wrist
   /// straight, q5 = 0) one representative of the family is returned.

@@ -777,10 +777,17 @@ Grouping GroupObjects(const SegmentResult& s, const scan::RangeImage& range,
       }
     }
     if (lowest >= 0 && std::abs(s.regions[lowest].normal_W.z()) > kFloorNz) {
+      // Horizontal regions at its height are pieces of the same plane (a line of missing cells
+      // can split the table): removed with it.
+      const double z0 = s.regions[lowest].centroid_W.z();
+      auto same_plane = [&](int k) {
+        return std::abs(s.regions[k].normal_W.z()) > kFloorNz &&
+               s.regions[k].centroid_W.z() < z0 + kFloorClearance;
+      };
       bool below_all = true;
       for (int k = 0; k < n; ++k) {
-        if (k != lowest && !removed[k] &&
-            s.regions[k].centroid_W.z() < s.regions[lowest].centroid_W.z() + kFloorClearance) {
+        if (k != lowest && !removed[k] && !same_plane(k) &&
+            s.regions[k].centroid_W.z() < z0 + kFloorClearance) {
           below_all = false;
         }
       }
@@ -788,9 +795,13 @@ Grouping GroupObjects(const SegmentResult& s, const scan::RangeImage& range,
         if (s.regions[lowest].centroid_W.z() > z + kFloorClearance) below_all = false;
       }
       if (below_all) {
-        removed[lowest] = 1;
-        floor_z.push_back(s.regions[lowest].centroid_W.z());
-        grouping.floor_or_wall.push_back(s.regions[lowest].id);
+        floor_z.push_back(z0);
+        for (int k = 0; k < n; ++k) {
+          if (!removed[k] && (k == lowest || same_plane(k))) {
+            removed[k] = 1;
+            grouping.floor_or_wall.push_back(s.regions[k].id);
+          }
+        }
         found = true;
         continue;
       }

@@ -1,9 +1,10 @@
-// `hgrasp model` as a user runs it: the default scenario gives both boxes, the yellow one as the
-// target, with every output DESIGN.md names; a target the robot cannot see exits 1 naming it;
-// bad input exits 2 and writes nothing.
+// `hgrasp model` and `hgrasp plan` as a user runs them: the default scenario gives both boxes,
+// the yellow one as the target, with every output DESIGN.md names, and a grasp of it; a target the
+// robot cannot see exits 1 naming it; bad input exits 2 and writes nothing.
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -66,6 +67,33 @@ TEST(CliModelTest, DefaultScenarioFindsBothBoxesAndTheYellowTarget) {
     EXPECT_TRUE(report["timing_s"].contains(key)) << key;
   }
   EXPECT_EQ(report["truth"]["boxes"].size(), 2u);
+}
+
+TEST(CliPlanTest, DefaultScenarioPlansAGraspOfTheYellowBox) {
+  const auto out = FreshOutDir("plan_default");
+  const auto r = RunHgrasp("plan " + std::string(HGRASP_ROOT_DIR) +
+                           "/scenarios/default.yaml --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "grasp.png"));
+  const nlohmann::json report = ReadJson(out / "report.json");
+  EXPECT_TRUE(report["ok"].get<bool>());
+  const nlohmann::json& g = report["grasp"];
+  ASSERT_TRUE(g.is_object());
+  EXPECT_TRUE(g["arm"] == "left" || g["arm"] == "right");
+  EXPECT_EQ(g["p_WE"].size(), 3u);
+  EXPECT_EQ(g["R_WE"].size(), 3u);
+  ASSERT_EQ(g["contacts_W"].size(), 2u);
+  // The contacts on the yellow box's true faces within 3 mm, its 6 cm apart.
+  EXPECT_EQ(report["truth"]["grasp"]["object"], "yellow_box");
+  for (const auto& d : report["truth"]["grasp"]["contact_to_surface_m"]) {
+    EXPECT_LT(d.get<double>(), 0.003);
+  }
+  Eigen::Vector3d c[2];
+  for (int i = 0; i < 2; ++i) {
+    for (int k = 0; k < 3; ++k) c[i][k] = g["contacts_W"][i][k].get<double>();
+  }
+  EXPECT_NEAR((c[1] - c[0]).norm(), 0.06, 0.004);
+  EXPECT_TRUE(report["timing_s"].contains("plan"));
 }
 
 TEST(CliModelTest, TargetColourNotSeenExitsOneNamingIt) {

@@ -202,18 +202,22 @@ TEST(GroupObjects, WallBehindEverythingIsRemoved) {
   EXPECT_EQ(g.objects[0].size(), 3u);
 }
 
-TEST(GroupObjects, LowHorizontalRegionWithAnotherAtItsHeightIsNoFloor) {
-  // Two coplanar separate patches at z = 0: neither is below the other by 5 mm, so no floor.
-  RangeImage img(20, 50);
+TEST(GroupObjects, PiecesOfTheFloorAtItsHeightAreOneFloor) {
+  // Two coplanar separate patches at z = 0 (a table split by a line of missing cells) and a box
+  // top 8 cm above: both patches are the floor, the top an object.
+  RangeImage img(40, 50);
   FillBlock(&img, 0, 20, 0, 20, Vector3d(0.3, -0.2, 0), Vector3d(kStep, 0, 0),
             Vector3d(0, kStep, 0));
-  FillBlock(&img, 0, 20, 30, 20, Vector3d(0.3, 0.1, 0), Vector3d(kStep, 0, 0),
+  FillBlock(&img, 0, 20, 30, 20, Vector3d(0.3, 0.1, 0.002), Vector3d(kStep, 0, 0),
+            Vector3d(0, kStep, 0));
+  FillBlock(&img, 25, 10, 10, 10, Vector3d(0.2, -0.05, 0.08), Vector3d(kStep, 0, 0),
             Vector3d(0, kStep, 0));
   const SegmentResult s = SegmentPlanes(img);
-  ASSERT_EQ(s.regions.size(), 2u);
+  ASSERT_EQ(s.regions.size(), 3u);
   const Grouping g = GroupObjects(s, img);
-  EXPECT_TRUE(g.floor_or_wall.empty());
-  EXPECT_EQ(g.objects.size(), 2u);
+  EXPECT_EQ(g.floor_or_wall.size(), 2u);
+  ASSERT_EQ(g.objects.size(), 1u);
+  EXPECT_EQ(g.objects[0].size(), 1u);
 }
 
 TEST(GroupObjects, LoneTopOverTheTableIsAnObjectNotASecondFloor) {

@@ -1,0 +1,81 @@
+#pragma once
+/// @file The grasp planner (Taylor & Kleeman, section 5.3): a two-finger grasp of a box model by
+/// the middles of two opposite faces just below the top, the hand aligned with the contacts and
+/// the palm above the box, reachable by the Puma's inverse kinematics within its joint limits,
+/// the most comfortable of the feasible grasps chosen. Beyond the paper: both arms are tried, a
+/// hand that would hit the table or another box is refused, and a pre-grasp pose above the box
+/// is planned for the approach.
+
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/geometry.h"
+#include "device/arm.h"
+#include "device/status.h"
+#include "model/box_fit.h"
+#include "robot/arm_kinematics.h"
+
+namespace hgrasp::grasp {
+
+/// The hand in its gripper frame E (models/humanoid.urdf): z the approach direction out of the
+/// flange, x from thumb to index; the fingers close symmetrically along x.
+struct HandGeometry {
+  double max_opening_m = 0.10;  ///< fingers fully open, inner pad faces apart
+  double contact_z_m = 0.12;    ///< height of the contact points above E along z
+  /// Boxes of the hand in E, centre and full size: the palm, and each pad at a given opening
+  /// (x is set from the opening; see HandBoxes).
+  Eigen::Vector3d palm_centre{0.0, 0.0, 0.02}, palm_size{0.12, 0.05, 0.04};
+  Eigen::Vector3d pad_size{0.012, 0.02, 0.10};
+  double pad_centre_z_m = 0.09;
+};
+
+struct GraspConfig {
+  double delta_m = 0.01;      ///< contacts this far below the top face (paper: delta)
+  double clearance_m = 0.01;  ///< opening beyond the box's width on each side
+  double approach_m = 0.08;   ///< pre-grasp: this far back along the approach
+  std::vector<double> tilts_deg = {0, 15, 30, 45, 60, -15, -30};  ///< approach tilts about x_E
+  double table_clearance_m = 0.003;  ///< the hand stays this far above the table (z = 0)
+  HandGeometry hand;
+};
+
+/// A planned grasp.
+struct GraspPlan {
+  int box = -1;                                   ///< index into the boxes planned over
+  device::Side side = device::Side::kLeft;        ///< the arm
+  Pose3 X_WE = Pose3::Identity();                 ///< gripper pose at the grasp
+  Pose3 X_WE_pre = Pose3::Identity();             ///< gripper pose before it, back along z_E
+  device::Joint6 q = device::Joint6::Zero();      ///< arm joints at the grasp
+  device::Joint6 q_pre = device::Joint6::Zero();  ///< arm joints at the pre-grasp
+  std::array<Eigen::Vector3d, 2> contacts_W{};    ///< thumb's contact, index finger's contact
+  double opening_m = 0;                           ///< finger opening for the approach
+  double tilt_rad = 0;                            ///< approach tilt about x_E from straight down
+  double comfort_rad = 0;  ///< angle between the forearm (joint 4's axis) and the approach
+};
+
+/// Plans a grasp of boxes[target], avoiding the other boxes and the table: for each pair of
+/// opposite side faces narrow enough for the open hand, each arm, each approach tilt and each
+/// inverse-kinematics solution within the joint limits whose hand clears the table and the other
+/// boxes at the grasp and at the pre-grasp, the one with the smallest comfort angle; nullopt when
+/// none is feasible. `arms` holds the left arm then the right one. If `feasible` is not null it
+/// receives every feasible candidate (for tests and pictures).
+std::optional<GraspPlan> PlanGrasp(const std::vector<model::BoxModel>& boxes, int target,
+                                   const std::array<const robot::ArmKinematics*, 2>& arms,
+                                   const GraspConfig& config = {},
+                                   std::vector<GraspPlan>* feasible = nullptr);
+
+/// The hand's boxes (palm, thumb pad, index pad) in W for gripper pose X_WE and a finger
+/// opening: centre, rotation and full size each.
+struct OrientedBox {
+  Eigen::Vector3d centre;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d size;
+};
+std::array<OrientedBox, 3> HandBoxes(const Pose3& X_WE, double opening_m, const HandGeometry& hand);
+
+/// Whether two oriented boxes overlap (separating axis test, 15 axes).
+bool Overlap(const OrientedBox& a, const OrientedBox& b);
+
+}  // namespace hgrasp::grasp
