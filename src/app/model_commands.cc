@@ -128,8 +128,11 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
     report["timing_s"]["plan"] = plan_s;
     if (grasp_plan) {
       const grasp::GraspPlan& g = *grasp_plan;
-      nlohmann::json q = nlohmann::json::array(), q_pre = nlohmann::json::array();
-      for (int i = 0; i < 6; ++i) q.push_back(g.q[i]), q_pre.push_back(g.q_pre[i]);
+      nlohmann::json q = nlohmann::json::array(), q_pre = nlohmann::json::array(),
+                     q_via = nlohmann::json::array();
+      for (int i = 0; i < 6; ++i) {
+        q.push_back(g.q[i]), q_pre.push_back(g.q_pre[i]), q_via.push_back(g.q_via[i]);
+      }
       report["grasp"] = {{"arm", g.side == device::Side::kLeft ? "left" : "right"},
                          {"p_WE", Vec(g.X_WE.translation())},
                          {"R_WE", Mat(g.X_WE.linear())},
@@ -137,6 +140,8 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
                          {"q", q},
                          {"p_WE_pre", Vec(g.X_WE_pre.translation())},
                          {"q_pre", q_pre},
+                         {"p_WE_via", Vec(g.X_WE_via.translation())},
+                         {"q_via", q_via},
                          {"opening", g.opening_m},
                          {"comfort_deg", RadToDeg(g.comfort_rad)}};
     } else {

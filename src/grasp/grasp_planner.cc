@@ -98,24 +98,35 @@ std::optional<GraspPlan> PlanGrasp(const std::vector<model::BoxModel>& boxes, in
       X_WE.translation() = 0.5 * (c[0] + c[1]) - config.hand.contact_z_m * z;  // t_g
       Pose3 X_WE_pre = X_WE;
       X_WE_pre.translation() -= config.approach_m * z;
+      Pose3 X_WE_via = X_WE_pre;
+      X_WE_via.translation().z() += config.via_height_m;
       if (!HandClear(X_WE, opening, boxes, target, config) ||
-          !HandClear(X_WE_pre, opening, boxes, target, config)) {
+          !HandClear(X_WE_pre, opening, boxes, target, config) ||
+          !HandClear(X_WE_via, opening, boxes, target, config)) {
         continue;
       }
       for (int side = 0; side < 2; ++side) {
         const robot::ArmKinematics& arm = *arms[side];
         const std::vector<robot::ArmIkSolution> pre = arm.Inverse(X_WE_pre);
-        for (const robot::ArmIkSolution& s : arm.Inverse(X_WE)) {
-          if (!arm.WithinLimits(s.q)) continue;
-          // The pre-grasp in the same configuration (the approach is a short straight move).
-          const robot::ArmIkSolution* p = nullptr;
-          for (const robot::ArmIkSolution& t : pre) {
+        const std::vector<robot::ArmIkSolution> via = arm.Inverse(X_WE_via);
+        // The solution of `among` in the configuration of s, within the limits; null if none.
+        auto same_configuration = [&](const std::vector<robot::ArmIkSolution>& among,
+                                      const robot::ArmIkSolution& s) {
+          const robot::ArmIkSolution* found = nullptr;
+          for (const robot::ArmIkSolution& t : among) {
             if (t.shoulder == s.shoulder && t.elbow == s.elbow && t.wrist == s.wrist &&
                 arm.WithinLimits(t.q)) {
-              p = &t;
+              found = &t;
             }
           }
-          if (p == nullptr) continue;
+          return found;
+        };
+        for (const robot::ArmIkSolution& s : arm.Inverse(X_WE)) {
+          if (!arm.WithinLimits(s.q)) continue;
+          // The pre-grasp and the via pose in the same configuration (short moves).
+          const robot::ArmIkSolution* p = same_configuration(pre, s);
+          const robot::ArmIkSolution* v = same_configuration(via, s);
+          if (p == nullptr || v == nullptr) continue;
           GraspPlan plan;
           plan.box = target;
           plan.side = side == 0 ? device::Side::kLeft : device::Side::kRight;
@@ -123,6 +134,8 @@ std::optional<GraspPlan> PlanGrasp(const std::vector<model::BoxModel>& boxes, in
           plan.X_WE_pre = X_WE_pre;
           plan.q = s.q;
           plan.q_pre = p->q;
+          plan.X_WE_via = X_WE_via;
+          plan.q_via = v->q;
           plan.contacts_W = c;
           plan.opening_m = opening;
           plan.tilt_rad = tilt;

@@ -33,9 +33,10 @@ struct HandGeometry {
 };
 
 struct GraspConfig {
-  double delta_m = 0.01;      ///< contacts this far below the top face (paper: delta)
-  double clearance_m = 0.01;  ///< opening beyond the box's width on each side
-  double approach_m = 0.08;   ///< pre-grasp: this far back along the approach
+  double delta_m = 0.01;       ///< contacts this far below the top face (paper: delta)
+  double clearance_m = 0.01;   ///< opening beyond the box's width on each side
+  double approach_m = 0.08;    ///< pre-grasp: this far back along the approach
+  double via_height_m = 0.10;  ///< via pose: this far above the pre-grasp
   std::vector<double> tilts_deg = {0, 15, 30, 45, 60, -15, -30};  ///< approach tilts about x_E
   double table_clearance_m = 0.003;  ///< the hand stays this far above the table (z = 0)
   HandGeometry hand;
@@ -49,18 +50,23 @@ struct GraspPlan {
   Pose3 X_WE_pre = Pose3::Identity();             ///< gripper pose before it, back along z_E
   device::Joint6 q = device::Joint6::Zero();      ///< arm joints at the grasp
   device::Joint6 q_pre = device::Joint6::Zero();  ///< arm joints at the pre-grasp
-  std::array<Eigen::Vector3d, 2> contacts_W{};    ///< thumb's contact, index finger's contact
-  double opening_m = 0;                           ///< finger opening for the approach
-  double tilt_rad = 0;                            ///< approach tilt about x_E from straight down
+  /// Gripper pose and joints above the pre-grasp (via_height_m), same configuration: moving
+  /// there first, the hand comes down onto the box instead of sweeping across the table.
+  Pose3 X_WE_via = Pose3::Identity();
+  device::Joint6 q_via = device::Joint6::Zero();
+  std::array<Eigen::Vector3d, 2> contacts_W{};  ///< thumb's contact, index finger's contact
+  double opening_m = 0;                         ///< finger opening for the approach
+  double tilt_rad = 0;                          ///< approach tilt about x_E from straight down
   double comfort_rad = 0;  ///< angle between the forearm (joint 4's axis) and the approach
 };
 
 /// Plans a grasp of boxes[target], avoiding the other boxes and the table: for each pair of
 /// opposite side faces narrow enough for the open hand, each arm, each approach tilt and each
-/// inverse-kinematics solution within the joint limits whose hand clears the table and the other
-/// boxes at the grasp and at the pre-grasp, the one with the smallest comfort angle; nullopt when
-/// none is feasible. `arms` holds the left arm then the right one. If `feasible` is not null it
-/// receives every feasible candidate (for tests and pictures).
+/// inverse-kinematics solution within the joint limits (with the pre-grasp and the via pose
+/// above it reachable in the same configuration) whose hand clears the table and the other
+/// boxes at the grasp, the pre-grasp and the via pose, the one with the smallest comfort angle;
+/// nullopt when none is feasible. `arms` holds the left arm then the right one. If `feasible` is
+/// not null it receives every feasible candidate (for tests and pictures).
 std::optional<GraspPlan> PlanGrasp(const std::vector<model::BoxModel>& boxes, int target,
                                    const std::array<const robot::ArmKinematics*, 2>& arms,
                                    const GraspConfig& config = {},

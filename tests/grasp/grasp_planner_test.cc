@@ -70,6 +70,10 @@ TEST(PlanGrasp, PaperGraspOfTheYellowBox) {
   EXPECT_TRUE(arm.WithinLimits(plan->q_pre));
   EXPECT_LT((arm.Forward(plan->q).translation() - plan->X_WE.translation()).norm(), 1e-9);
   EXPECT_LT((arm.Forward(plan->q_pre).translation() - plan->X_WE_pre.translation()).norm(), 1e-9);
+  // The via pose 10 cm above the pre-grasp, reachable too.
+  EXPECT_NEAR(plan->X_WE_via.translation().z() - plan->X_WE_pre.translation().z(), 0.10, 1e-12);
+  EXPECT_TRUE(arm.WithinLimits(plan->q_via));
+  EXPECT_LT((arm.Forward(plan->q_via).translation() - plan->X_WE_via.translation()).norm(), 1e-9);
   // The most comfortable of all feasible candidates; both arms were considered.
   bool left = false, right = false;
   for (const GraspPlan& p : feasible) {
