@@ -12,11 +12,9 @@
 #include "common/paths.h"
 #include "grasp/grasp_planner.h"
 #include "model/scene_model.h"
-#include "robot/calibration.h"
-#include "robot/head_kinematics.h"
-#include "scan/scanner.h"
 #include "sim/random_scene.h"
 #include "sim/sim_devices.h"
+#include "tests/scan/sim_scan.h"
 
 namespace hgrasp::grasp {
 namespace {
@@ -43,11 +41,7 @@ struct Outcome {
 Outcome GraspAndLift(const sim::Scenario& scenario) {
   sim::SimRobot robot(scenario);
   device::RobotDevices dev = robot.TakeDevices();
-  scan::Scanner scanner(
-      robot::HeadKinematics::FromUrdfFile(ResolveDataPath("models/humanoid.urdf")),
-      robot::LoadStereoIntrinsics(ResolveDataPath("calibration/sim/cameras.yaml")),
-      robot::LoadLaserCalibration(ResolveDataPath("calibration/sim/laser.yaml")));
-  const model::SceneModel scene = model::ModelScene(scanner.Scan(dev, {}).range);
+  const model::SceneModel scene = model::ModelScene(scan::testing::ScanWith(dev));
   const std::optional<int> target =
       model::ChooseByColour(scene.colours, scenario.task->target_color);
   Outcome out;

@@ -10,14 +10,19 @@
 
 namespace hgrasp::scan::testing {
 
-/// Scans with `robot` (which must not have given its devices away yet), with the shipped
-/// calibration of the simulated robot. The head stays where the scan left it.
-inline RangeImage ScanInSim(sim::SimRobot* robot) {
-  auto dev = robot->TakeDevices();
+/// Scans through `dev` (the simulated robot's devices), with the shipped calibration of the
+/// simulated robot. The head stays where the scan left it.
+inline RangeImage ScanWith(device::RobotDevices& dev) {
   Scanner scanner(robot::HeadKinematics::FromUrdfFile(ResolveDataPath("models/humanoid.urdf")),
                   robot::LoadStereoIntrinsics(ResolveDataPath("calibration/sim/cameras.yaml")),
                   robot::LoadLaserCalibration(ResolveDataPath("calibration/sim/laser.yaml")));
   return scanner.Scan(dev, {}).range;
+}
+
+/// As ScanWith, taking `robot`'s devices (it must not have given them away yet).
+inline RangeImage ScanInSim(sim::SimRobot* robot) {
+  device::RobotDevices dev = robot->TakeDevices();
+  return ScanWith(dev);
 }
 
 }  // namespace hgrasp::scan::testing
