@@ -178,7 +178,8 @@ class Parser {
   ObjectSpec ParseObject(const YAML::Node& n, const std::string& field, ObjectNodes* nodes) const;
   InterferenceSpec ParseInterference(const YAML::Node& n, const std::string& field) const;
   TaskSpec ParseTask(const YAML::Node& n, const std::string& field, YAML::Node* name_node) const;
-  DeviceSpec ParseDevice(const YAML::Node& n, const std::string& field) const;
+  DeviceSpec ParseDevice(const YAML::Node& n, std::string_view key, const std::string& field) const;
+  void CheckAcrossDevices(const Scenario& s, const YAML::Node& devices) const;
   void CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const;
 
   std::string path_;
@@ -293,33 +294,106 @@ TaskSpec Parser::ParseTask(const YAML::Node& n, const std::string& field,
   return t;
 }
 
-DeviceSpec Parser::ParseDevice(const YAML::Node& n, const std::string& field) const {
-  const Entries e = MapOf(n, field, {"driver", "params"},
-                          "a device backend: a map with driver and optionally params");
+DeviceSpec Parser::ParseDevice(const YAML::Node& n, std::string_view key,
+                               const std::string& field) const {
+  // The drivers this device accepts.
+  std::vector<std::string> drivers = {"sim"};
+  const DriverKind* kind = nullptr;
+  for (const DriverKind& k : kDrivers) {
+    if (k.devices[0] == key || k.devices[1] == key) drivers.emplace_back(k.driver);
+  }
+  const std::string driver_expected =
+      "a driver for " + std::string(key) + ", " + OneOf(Keys(drivers.begin(), drivers.end()));
+  if (!n.IsMap()) Fail(n, field, "a device backend: a map with driver and its settings");
+  const YAML::Node driver = n["driver"];
+  if (!driver) Fail(n.Mark(), Join(field, "driver"), "", driver_expected);
   DeviceSpec d;
-  const std::string driver_expected = "a driver: sim (the only one so far)";
-  const YAML::Node& driver = Require(e, n, field, "driver", driver_expected);
   d.driver = Text(driver, Join(field, "driver"), driver_expected);
-  if (d.driver != "sim") Fail(driver, Join(field, "driver"), driver_expected);
+  for (const DriverKind& k : kDrivers) {
+    if (k.driver == d.driver && (k.devices[0] == key || k.devices[1] == key)) kind = &k;
+  }
+  if (kind == nullptr && d.driver != "sim") Fail(driver, Join(field, "driver"), driver_expected);
 
-  if (const YAML::Node* params = Find(e, "params")) {
-    const std::string params_field = Join(field, "params");
-    if (!params->IsMap()) Fail(*params, params_field, "a map of driver parameters");
-    for (const auto& kv : *params) {
-      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : Render(kv.first);
-      if (!kv.first.IsScalar() || key.empty()) {
-        Fail(kv.first.Mark(), params_field, key, "parameter names as plain keys");
+  Keys allowed = {"driver"};
+  std::string expected = "a device backend: driver " + d.driver + " takes no settings";
+  if (d.serial()) {
+    allowed = {"driver", "port", "baud", "framing"};
+    expected = "a serial device: driver, port and optionally baud, framing";
+  } else if (d.driver == "gstreamer") {
+    allowed = {"driver", "left", "right"};
+    expected = "cameras through GStreamer: driver, left and right (the pipelines)";
+  }
+  const Entries e = MapOf(n, field, allowed, expected);
+  if (d.serial()) {
+    const std::string port_expected = "the serial port's path, e.g. /dev/ttyS0";
+    d.port = Text(Require(e, n, field, "port", port_expected), Join(field, "port"), port_expected);
+    d.baud = kind->default_baud;
+    if (const YAML::Node* baud = Find(e, "baud")) {
+      static constexpr int kBauds[] = {1200,  2400,   4800,   9600,   19200, 38400,
+                                       57600, 115200, 230400, 460800, 921600};
+      std::string rates;
+      for (int b : kBauds) rates += (rates.empty() ? "" : ", ") + std::to_string(b);
+      const std::string baud_expected = "a standard baud rate: " + rates;
+      const std::optional<std::uint64_t> v = ParseUnsigned(*baud);
+      if (!v || std::find(std::begin(kBauds), std::end(kBauds), static_cast<int>(*v)) ==
+                    std::end(kBauds)) {
+        Fail(*baud, Join(field, "baud"), baud_expected + QuoteHint(*baud));
       }
-      if (d.params.count(key) != 0) {
-        Fail(kv.first.Mark(), Join(params_field, key), key, "each parameter once");
-      }
-      if (!kv.second.IsScalar()) {
-        Fail(kv.second, Join(params_field, key), "a single value (text or number)");
-      }
-      d.params.emplace(key, kv.second.Scalar());
+      d.baud = static_cast<int>(*v);
     }
+    if (const YAML::Node* framing = Find(e, "framing")) {
+      const std::string framing_expected =
+          "data bits 5-8, parity N, E or O, stop bits 1 or 2, e.g. 8N1";
+      d.framing = Text(*framing, Join(field, "framing"), framing_expected);
+      const std::string& f = d.framing;
+      if (f.size() != 3 || f[0] < '5' || f[0] > '8' ||
+          std::string("NEO").find(f[1]) == std::string::npos || (f[2] != '1' && f[2] != '2')) {
+        Fail(*framing, Join(field, "framing"), framing_expected);
+      }
+    }
+  } else if (d.driver == "gstreamer") {
+    const std::string pipe_expected =
+        "a GStreamer pipeline ending in appsink, e.g. v4l2src device=/dev/video0 ! videoconvert "
+        "! appsink";
+    d.left = Text(Require(e, n, field, "left", pipe_expected), Join(field, "left"), pipe_expected);
+    d.right =
+        Text(Require(e, n, field, "right", pipe_expected), Join(field, "right"), pipe_expected);
   }
   return d;
+}
+
+void Parser::CheckAcrossDevices(const Scenario& s, const YAML::Node& devices) const {
+  const auto spec = [&](const char* key) -> const DeviceSpec* {
+    const auto it = s.devices.find(key);
+    return it == s.devices.end() ? nullptr : &it->second;
+  };
+  // The camera driver takes the laser's encoder count latched at each exposure from the board.
+  const DeviceSpec* cameras = spec("cameras");
+  const DeviceSpec* laser = spec("laser");
+  if (cameras != nullptr && cameras->driver == "gstreamer" &&
+      (laser == nullptr || laser->driver != "laser_board")) {
+    Fail(devices["cameras"]["driver"], "devices.cameras.driver",
+         "sim, unless devices.laser is the laser_board too: real cameras take the laser's encoder "
+         "count latched at each frame from the board");
+  }
+  // One port, one device; the laser and the LEDs share the laser board.
+  std::map<std::string, std::string> owner;  // port -> device key
+  for (const auto& [key, d] : s.devices) {
+    if (!d.serial()) continue;
+    const auto [it, fresh] = owner.emplace(d.port, key);
+    if (fresh) continue;
+    const DeviceSpec& other = s.devices.at(it->second);
+    const bool board = d.driver == "laser_board" && other.driver == "laser_board";
+    if (!board) {
+      Fail(devices[key]["port"], Join(Join("devices", key), "port"),
+           "a port of its own (devices." + it->second + " uses it)");
+    }
+    if (d.baud != other.baud || d.framing != other.framing) {
+      Fail(devices[key]["port"], Join(Join("devices", key), "port"),
+           "the laser and the LEDs on one board: the same baud and framing as devices." +
+               it->second);
+    }
+  }
 }
 
 void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const {
@@ -450,8 +524,9 @@ Scenario Parser::Parse(const std::string& text) {
     const Entries de = MapOf(*devices, "devices", keys,
                              "a map from device to backend, e.g. {head: {driver: sim}}");
     for (const auto& [key, entry] : de) {
-      s.devices.emplace(key, ParseDevice(entry.value, Join("devices", key)));
+      s.devices.emplace(key, ParseDevice(entry.value, key, Join("devices", key)));
     }
+    CheckAcrossDevices(s, *devices);
   }
 
   // Checks across fields.

@@ -77,11 +77,32 @@ struct TaskSpec {
   double lift_m = 0.05;      ///< m, > 0 and <= kMaxLift
 };
 
-/// Backend of one device (DESIGN.md rule 2). Only driver "sim" is valid for now. params are kept
-/// as written (scalar values); checking them is the driver's job.
+/// A real driver and the devices it can serve (DESIGN.md rule 2: the backend is chosen here, at
+/// run time). Every device also accepts driver "sim".
+struct DriverKind {
+  std::string_view driver;
+  std::array<std::string_view, 2> devices;  ///< keys of kDeviceKeys ("" when only one)
+  int default_baud;                         ///< serial drivers; 0 for the cameras
+};
+
+inline constexpr std::array<DriverKind, 5> kDrivers = {{
+    {"val2", {"arm_left", "arm_right"}, 9600},           // Puma controllers, VAL II
+    {"sensorhand", {"hand_left", "hand_right"}, 19200},  // Otto Bock SensorHand Speed
+    {"biclops", {"head", ""}, 9600},                     // PMD motion chips of the Biclops head
+    {"laser_board", {"laser", "leds"}, 115200},          // our laser/LED board
+    {"gstreamer", {"cameras", ""}, 0},                   // frame grabber through GStreamer
+}};
+
+/// Backend of one device (DESIGN.md rule 2), e.g. `arm_left: {driver: val2, port: /dev/ttyS0}`.
 struct DeviceSpec {
-  std::string driver = "sim";
-  std::map<std::string, std::string> params;
+  std::string driver = "sim";   ///< "sim" or one of kDrivers serving this device
+  std::string port;             ///< serial drivers: the port's path (required)
+  int baud = 0;                 ///< serial drivers: bits/s, a standard rate (default per driver)
+  std::string framing = "8N1";  ///< serial drivers: data bits 5-8, parity N/E/O, stop bits 1-2
+  std::string left, right;      ///< gstreamer: the left and right camera's pipeline (required)
+
+  bool simulated() const { return driver == "sim"; }
+  bool serial() const { return !simulated() && driver != "gstreamer"; }
 };
 
 /// A parsed and checked scenario file.

@@ -121,12 +121,26 @@ TEST(ScenarioTest, FullBlockStyleValues) {
   EXPECT_EQ(s.task->target_color, "");
   EXPECT_EQ(s.task->lift_m, 0.08);
 
-  ASSERT_EQ(s.devices.size(), 2u);
-  EXPECT_EQ(s.devices.at("head").driver, "sim");
-  EXPECT_EQ(s.devices.at("head").params.at("latency_s"), "0.01");
-  EXPECT_EQ(s.devices.at("head").params.at("label"), "left head");
-  EXPECT_EQ(s.devices.at("laser").driver, "sim");
-  EXPECT_TRUE(s.devices.at("laser").params.empty());
+  ASSERT_EQ(s.devices.size(), 5u);
+  const DeviceSpec& head = s.devices.at("head");
+  EXPECT_EQ(head.driver, "biclops");
+  EXPECT_EQ(head.port, "/dev/ttyS1");
+  EXPECT_EQ(head.baud, 9600);  // the driver's default
+  EXPECT_EQ(head.framing, "8N1");
+  EXPECT_TRUE(head.serial());
+  const DeviceSpec& arm = s.devices.at("arm_left");
+  EXPECT_EQ(arm.driver, "val2");
+  EXPECT_EQ(arm.baud, 19200);
+  EXPECT_EQ(arm.framing, "7E2");
+  // The laser and the LEDs share one board, hence one port.
+  EXPECT_EQ(s.devices.at("laser").port, "/dev/ttyUSB0");
+  EXPECT_EQ(s.devices.at("leds").port, "/dev/ttyUSB0");
+  EXPECT_EQ(s.devices.at("leds").baud, 115200);
+  const DeviceSpec& cameras = s.devices.at("cameras");
+  EXPECT_EQ(cameras.driver, "gstreamer");
+  EXPECT_FALSE(cameras.serial());
+  EXPECT_EQ(cameras.left, "v4l2src device=/dev/video0 ! videoconvert ! appsink");
+  EXPECT_EQ(cameras.right, "v4l2src device=/dev/video1 ! videoconvert ! appsink");
 }
 
 TEST(ScenarioTest, JsonFlowStyle) {
@@ -264,7 +278,10 @@ const BadCase kBadCases[] = {
     {"bad_color_name.yaml", 3, "task.target.color", "purple"},
     {"bad_color_range.yaml", 7, "objects[0].color", "[1.2, 0.5, 0.1]"},
     {"bad_device_key.yaml", 3, "devices.gripper", "gripper"},
-    {"bad_driver.yaml", 3, "devices.head.driver", "biclops"},
+    {"bad_driver.yaml", 3, "devices.head.driver", "pmd9000"},
+    {"bad_device_baud.yaml", 5, "devices.hand_left.baud", "9601"},
+    {"bad_device_port.yaml", 3, "devices.arm_left.port", ""},
+    {"bad_cameras_without_board.yaml", 6, "devices.cameras.driver", "gstreamer"},
     {"bad_duplicate_key.yaml", 4, "seed", "seed"},
     {"bad_duplicate_name.yaml", 8, "objects[1].name", "twin"},
     {"bad_empty.yaml", 0, "top level", ""},
@@ -417,8 +434,28 @@ TEST(ScenarioTest, MoreBadValues) {
       {"name: t\ntask: 1\n", "task"},
       {"name: t\ndevices: {head: {}}\n", "devices.head.driver"},
       {"name: t\ndevices: {head: sim}\n", "devices.head"},
-      {"name: t\ndevices: {head: {driver: sim, params: {a: [1, 2]}}}\n", "devices.head.params.a"},
-      {"name: t\ndevices: {head: {driver: sim, params: 3}}\n", "devices.head.params"},
+      {"name: t\ndevices: {head: {driver: sim, port: /dev/ttyS0}}\n", "devices.head.port"},
+      {"name: t\ndevices: {head: {driver: val2, port: /dev/ttyS0}}\n", "devices.head.driver"},
+      {"name: t\ndevices: {arm_left: {driver: val2}}\n", "devices.arm_left.port"},
+      {"name: t\ndevices: {arm_left: {driver: val2, port: [a]}}\n", "devices.arm_left.port"},
+      {"name: t\ndevices: {arm_left: {driver: val2, port: a, baud: fast}}\n",
+       "devices.arm_left.baud"},
+      {"name: t\ndevices: {arm_left: {driver: val2, port: a, baud: -9600}}\n",
+       "devices.arm_left.baud"},
+      {"name: t\ndevices: {arm_left: {driver: val2, port: a, framing: 9N1}}\n",
+       "devices.arm_left.framing"},
+      {"name: t\ndevices: {arm_left: {driver: val2, port: a, framing: 8X1}}\n",
+       "devices.arm_left.framing"},
+      {"name: t\ndevices: {arm_left: {driver: val2, port: a, pipeline: b}}\n",
+       "devices.arm_left.pipeline"},
+      {"name: t\ndevices: {cameras: {driver: gstreamer, left: a}}\n", "devices.cameras.right"},
+      {"name: t\ndevices: {arm_left: {driver: val2, port: a},\n  arm_right: {driver: val2, port: "
+       "a}}\n",
+       "devices.arm_right.port"},
+      {"name: t\ndevices: {laser: {driver: laser_board, port: a},\n  leds: {driver: laser_board, "
+       "port: a, "
+       "baud: 9600}}\n",
+       "devices.leds.port"},
       {"name: t\ndevices: []\n", "devices"},
   };
   for (const auto& c : cases) {

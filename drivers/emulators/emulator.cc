@@ -1,0 +1,111 @@
+#include "emulators/emulator.h"
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <cerrno>
+
+namespace hgrasp::drivers {
+
+EmulatorHost::EmulatorHost(std::unique_ptr<DeviceEmulator> device, std::string link_path,
+                           double tick_s)
+    : device_(std::move(device)),
+      tick_s_(tick_s),
+      pty_(std::move(link_path)),
+      start_(std::chrono::steady_clock::now()) {
+  thread_ = std::thread([this] { Run(); });
+}
+
+EmulatorHost::~EmulatorHost() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stop_ = true;
+  }
+  thread_.join();
+}
+
+std::string EmulatorHost::port() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return pty_.port();
+}
+
+void EmulatorHost::Vanish() {
+  std::lock_guard<std::mutex> lock(mu_);
+  pty_.Close();
+}
+
+void EmulatorHost::Reappear() {
+  std::lock_guard<std::mutex> lock(mu_);
+  pty_.Reopen();
+}
+
+double EmulatorHost::Now() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+namespace {
+
+// Writes all of `bytes` to the (non-blocking) master; what the pty cannot take within a short
+// while is lost, as on a serial line nobody listens to.
+void WriteAll(int fd, const std::vector<std::uint8_t>& bytes) {
+  std::size_t done = 0;
+  int stalls = 0;
+  while (done < bytes.size() && stalls < 50) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n > 0) {
+      done += static_cast<std::size_t>(n);
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && errno == EAGAIN) {
+      pollfd p{fd, POLLOUT, 0};
+      ::poll(&p, 1, 2);
+      ++stalls;
+      continue;
+    }
+    return;
+  }
+}
+
+}  // namespace
+
+void EmulatorHost::Run() {
+  std::vector<std::uint8_t> out;
+  std::uint8_t buf[512];
+  const int tick_ms = std::max(1, static_cast<int>(tick_s_ * 1000.0 + 0.5));
+  for (;;) {
+    int fd;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (stop_) return;
+      fd = pty_.master_fd();
+    }
+    if (fd < 0) {
+      // The port has vanished: the device keeps running without a link.
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        out.clear();
+        device_->Advance(Now(), &out);
+      }
+      ::usleep(static_cast<useconds_t>(tick_ms * 1000));
+      continue;
+    }
+    pollfd p{fd, POLLIN, 0};
+    const int r = ::poll(&p, 1, tick_ms);
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stop_) return;
+    if (pty_.master_fd() != fd) continue;  // vanished or reopened meanwhile
+    out.clear();
+    const double t = Now();
+    device_->Advance(t, &out);
+    if (r > 0 && (p.revents & POLLIN) != 0) {
+      const ssize_t n = ::read(fd, buf, sizeof(buf));
+      if (n > 0) {
+        device_->Receive(std::span<const std::uint8_t>(buf, static_cast<std::size_t>(n)), t, &out);
+      }
+    }
+    if (!out.empty()) WriteAll(fd, out);
+  }
+}
+
+}  // namespace hgrasp::drivers

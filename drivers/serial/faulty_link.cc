@@ -1,0 +1,95 @@
+#include "serial/faulty_link.h"
+
+namespace hgrasp::drivers {
+
+FaultyLink::FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan)
+    : inner_(std::move(inner)), plan_(plan), rng_(plan.seed) {
+  const Clock::time_point now = Clock::now();
+  dropout_end_ = now;
+  next_dropout_ = now;
+  if (plan_.dropouts_per_s > 0.0) {
+    std::exponential_distribution<double> gap(plan_.dropouts_per_s);
+    next_dropout_ =
+        now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(gap(rng_)));
+  }
+}
+
+void FaultyLink::Cut(bool cut) {
+  std::lock_guard<std::mutex> lock(mu_);
+  cut_ = cut;
+}
+
+FaultCounts FaultyLink::counts() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return counts_;
+}
+
+bool FaultyLink::InDropout(Clock::time_point now) {
+  if (plan_.dropouts_per_s <= 0.0) return false;
+  while (now >= next_dropout_) {
+    dropout_end_ = next_dropout_ + std::chrono::duration_cast<Clock::duration>(
+                                       std::chrono::duration<double>(plan_.dropout_s));
+    ++counts_.dropouts;
+    std::exponential_distribution<double> gap(plan_.dropouts_per_s);
+    next_dropout_ = dropout_end_ + std::chrono::duration_cast<Clock::duration>(
+                                       std::chrono::duration<double>(gap(rng_)));
+  }
+  return now < dropout_end_;
+}
+
+void FaultyLink::Damage(std::span<const std::uint8_t> in, std::vector<std::uint8_t>* out) {
+  std::lock_guard<std::mutex> lock(mu_);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::uniform_int_distribution<int> other(1, 255), any(0, 255);
+  const bool lost = cut_ || InDropout(Clock::now());
+  for (std::uint8_t b : in) {
+    ++counts_.bytes;
+    if (lost) {
+      ++counts_.dropped;
+      continue;
+    }
+    if (plan_.corrupt_probability > 0.0 && u(rng_) < plan_.corrupt_probability) {
+      b = static_cast<std::uint8_t>(b ^ other(rng_));
+      ++counts_.corrupted;
+    }
+    out->push_back(b);
+    if (plan_.garbage_probability > 0.0 && u(rng_) < plan_.garbage_probability) {
+      out->push_back(static_cast<std::uint8_t>(any(rng_)));
+      ++counts_.inserted;
+    }
+  }
+}
+
+device::Status FaultyLink::Write(std::span<const std::uint8_t> bytes) {
+  std::vector<std::uint8_t> out;
+  out.reserve(bytes.size() + 4);
+  Damage(bytes, &out);
+  if (out.empty()) return device::Status::kOk;  // lost on the wire: the sender cannot tell
+  return inner_->Write(out);
+}
+
+device::Status FaultyLink::Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) {
+  *n = 0;
+  const Clock::time_point deadline =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                         std::chrono::duration<double>(std::max(timeout_s, 0.0)));
+  for (;;) {
+    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    // Read at most half the buffer: inserted garbage may double what comes out.
+    std::vector<std::uint8_t> raw(std::max<std::size_t>(1, buf.size() / 2));
+    std::size_t got = 0;
+    const device::Status s = inner_->Read(raw, std::max(left, 0.0), &got);
+    if (s != device::Status::kOk) return s;
+    std::vector<std::uint8_t> out;
+    Damage(std::span<const std::uint8_t>(raw.data(), got), &out);
+    if (!out.empty()) {
+      // Inserted bytes beyond the caller's buffer are dropped too (an overrun).
+      *n = std::min(out.size(), buf.size());
+      std::copy(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(*n), buf.begin());
+      return device::Status::kOk;
+    }
+    if (Clock::now() >= deadline) return device::Status::kTimeout;
+  }
+}
+
+}  // namespace hgrasp::drivers

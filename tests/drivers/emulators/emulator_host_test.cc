@@ -1,0 +1,84 @@
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "emulators/emulator.h"
+#include "serial/serial_port.h"
+
+namespace hgrasp::drivers {
+namespace {
+
+using device::Status;
+
+// Answers each byte with the byte + 1, and counts ticks.
+class Incrementer final : public DeviceEmulator {
+ public:
+  void Receive(std::span<const std::uint8_t> in, double t_s,
+               std::vector<std::uint8_t>* out) override {
+    for (std::uint8_t b : in) out->push_back(static_cast<std::uint8_t>(b + 1));
+    received += in.size();
+  }
+  void Advance(double t_s, std::vector<std::uint8_t>* out) override { last_t = t_s; }
+  std::size_t received = 0;
+  double last_t = 0.0;
+};
+
+std::vector<std::uint8_t> ReadN(ByteLink& link, std::size_t n, double timeout_s) {
+  std::vector<std::uint8_t> got;
+  std::uint8_t buf[64];
+  while (got.size() < n) {
+    std::size_t k = 0;
+    if (link.Read(buf, timeout_s, &k) != Status::kOk) break;
+    got.insert(got.end(), buf, buf + k);
+  }
+  return got;
+}
+
+TEST(EmulatorHost, ServesTheDeviceOnAPty) {
+  EmulatorHost host(std::make_unique<Incrementer>());
+  std::string error;
+  auto port = SerialPort::Open({host.port(), 9600}, &error);
+  ASSERT_TRUE(port) << error;
+  const std::uint8_t msg[] = {1, 2, 3, 250};
+  ASSERT_EQ(port->Write(msg), Status::kOk);
+  EXPECT_EQ(ReadN(*port, 4, 1.0), (std::vector<std::uint8_t>{2, 3, 4, 251}));
+  EXPECT_EQ(host.With([](DeviceEmulator& d) { return dynamic_cast<Incrementer&>(d).received; }),
+            4u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_GT(host.With([](DeviceEmulator& d) { return dynamic_cast<Incrementer&>(d).last_t; }), 0.0);
+}
+
+TEST(EmulatorHost, PortVanishesAndComesBackUnderItsLink) {
+  const std::string link = ::testing::TempDir() + "hgrasp_emulator_host_link";
+  EmulatorHost host(std::make_unique<Incrementer>(), link);
+  EXPECT_EQ(host.port(), link);
+  std::string error;
+  auto port = SerialPort::Open({link, 19200}, &error);
+  ASSERT_TRUE(port) << error;
+  const std::uint8_t a[] = {10};
+  ASSERT_EQ(port->Write(a), Status::kOk);
+  EXPECT_EQ(ReadN(*port, 1, 1.0), std::vector<std::uint8_t>{11});
+
+  host.Vanish();
+  std::uint8_t buf[8];
+  std::size_t n = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(port->Read(buf, 0.2, &n), Status::kDisconnected);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.5);
+  EXPECT_FALSE(port->connected());
+  EXPECT_EQ(port->Write(a), Status::kDisconnected);
+
+  host.Reappear();
+  // The port reopens by itself on a later call.
+  Status s = Status::kDisconnected;
+  for (int i = 0; i < 50 && s != Status::kOk; ++i) {
+    s = port->Write(a);
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  ASSERT_EQ(s, Status::kOk);
+  EXPECT_EQ(ReadN(*port, 1, 1.0), std::vector<std::uint8_t>{11});
+  EXPECT_EQ(port->reconnects(), 1);
+}
+
+}  // namespace
+}  // namespace hgrasp::drivers
