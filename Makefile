@@ -4,21 +4,27 @@
 # run    builds, then scans the default scenario headless into out/default/
 # test   builds, then runs every test (ctest)
 # bench  builds, then runs the benchmarks in tests/bench/
+# fuzz   builds the protocol decoders' libFuzzer targets with clang (ASan + UBSan) in build-fuzz/
+#        and runs each for FUZZ_RUNS inputs
 
 JOBS     ?= 2
 BUILD    ?= build
 SCENARIO ?= scenarios/default.yaml
 OUT      ?= out/default
+FUZZ_BUILD ?= build-fuzz
+FUZZ_RUNS  ?= 1000000
+FUZZERS    := val2_fuzz biclops_fuzz sensorhand_fuzz laser_board_fuzz
 
 PACKAGES := build-essential cmake pkg-config git \
 	libmujoco-dev libeigen3-dev libopencv-dev liburdfdom-dev liburdfdom-tools \
 	libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
 	libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri \
-	libgtest-dev libgmock-dev libbenchmark-dev
+	libgtest-dev libgmock-dev libbenchmark-dev \
+	gstreamer1.0-plugins-base
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps build run test bench clean
+.PHONY: deps build run test bench fuzz clean
 
 deps:
 	@missing=$$(for p in $(PACKAGES); do \
@@ -46,5 +52,19 @@ test: build
 bench: build
 	./$(BUILD)/tests/bench/hgrasp_bench --benchmark_counters_tabular=true
 
+fuzz: deps
+	@missing=; for p in clang libclang-rt-dev; do \
+	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; fi
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DHGRASP_FUZZ=ON -DHGRASP_BUILD_TESTS=OFF \
+	  -DCMAKE_BUILD_TYPE=RelWithDebInfo
+	cmake --build $(FUZZ_BUILD) -j$(JOBS) --target $(FUZZERS)
+	@for f in $(FUZZERS); do \
+	  echo "== $$f: $(FUZZ_RUNS) inputs"; \
+	  ./$(FUZZ_BUILD)/tests/fuzz/$$f -runs=$(FUZZ_RUNS) -max_len=512 -print_final_stats=1 || exit 1; \
+	done
+
 clean:
-	rm -rf $(BUILD) out
+	rm -rf $(BUILD) $(FUZZ_BUILD) out

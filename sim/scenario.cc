@@ -308,6 +308,7 @@ DeviceSpec Parser::ParseDevice(const YAML::Node& n, std::string_view key,
   const YAML::Node driver = n["driver"];
   if (!driver) Fail(n.Mark(), Join(field, "driver"), "", driver_expected);
   DeviceSpec d;
+  d.line = n.Mark().line + 1;
   d.driver = Text(driver, Join(field, "driver"), driver_expected);
   for (const DriverKind& k : kDrivers) {
     if (k.driver == d.driver && (k.devices[0] == key || k.devices[1] == key)) kind = &k;

@@ -100,6 +100,7 @@ struct DeviceSpec {
   int baud = 0;                 ///< serial drivers: bits/s, a standard rate (default per driver)
   std::string framing = "8N1";  ///< serial drivers: data bits 5-8, parity N/E/O, stop bits 1-2
   std::string left, right;      ///< gstreamer: the left and right camera's pipeline (required)
+  int line = 0;  ///< the entry's line in the scenario file (1-based), for errors found later
 
   bool simulated() const { return driver == "sim"; }
   bool serial() const { return !simulated() && driver != "gstreamer"; }

@@ -58,4 +58,15 @@ int Model(const ModelOptions& options);
 /// grasp in report.json; exit 1 when no grasp is reachable.
 int Plan(const ModelOptions& options);
 
+struct EmulateOptions {
+  std::string device;          ///< val2, biclops, sensorhand or laser_board
+  std::string side = "right";  ///< val2: which arm's controller (its kinematics)
+  std::string link;            ///< optional stable path: a symlink to the pty
+  double seconds = 0.0;        ///< > 0: stop after this long (else at SIGINT / SIGTERM)
+};
+
+/// `hgrasp emulate`: serves one device emulator on a pseudo-terminal and prints the port's path
+/// (the link when given) on stdout.
+int Emulate(const EmulateOptions& options);
+
 }  // namespace hgrasp::app

@@ -66,6 +66,18 @@ int main(int argc, char** argv) {
       "plan", "As `model`, then the grasp of the target: grasp.png, the grasp in report.json",
       &plan.scenario, &plan.out_dir, &plan.files);
 
+  hgrasp::app::EmulateOptions emulate;
+  CLI::App* cmd_emulate = app.add_subcommand(
+      "emulate",
+      "Serve one device's emulator on a pseudo-terminal and print its port, for the real "
+      "drivers (devices block of a scenario) without the hardware; stops at Ctrl-C");
+  cmd_emulate->add_option("device", emulate.device, "val2, biclops, sensorhand or laser_board")
+      ->required();
+  cmd_emulate->add_option("--side", emulate.side, "val2: the left or right arm (default right)");
+  cmd_emulate->add_option("--link", emulate.link,
+                          "also make this path a symlink to the port (stable across restarts)");
+  cmd_emulate->add_option("--seconds", emulate.seconds, "stop after this many seconds");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -78,6 +90,7 @@ int main(int argc, char** argv) {
     if (*cmd_scan) return hgrasp::app::Scan(scan);
     if (*cmd_model) return hgrasp::app::Model(model);
     if (*cmd_plan) return hgrasp::app::Plan(plan);
+    if (*cmd_emulate) return hgrasp::app::Emulate(emulate);
   } catch (const hgrasp::InputError& e) {
     std::fprintf(stderr, "hgrasp: %s\n", e.what());
     return 2;

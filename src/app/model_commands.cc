@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "app/commands.h"
+#include "app/devices.h"
 #include "app/pictures.h"
 #include "common/paths.h"
 #include "grasp/grasp_planner.h"
@@ -55,7 +56,7 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
   const auto head = robot::HeadKinematics::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
   sim::SimRobot robot(scenario);
-  device::RobotDevices dev = robot.TakeDevices();
+  device::RobotDevices dev = MakeDevices(scenario, &robot);
   scan::Scanner scanner(head, cameras, laser);
 
   auto t = Clock::now();
@@ -149,57 +150,60 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
     }
   }
 
-  // Ground truth: each true object against the fitted box nearest to it.
-  nlohmann::json truth = sim::TruthJson(robot.world(), robot.rig(), {});
-  nlohmann::json matches = nlohmann::json::array();
-  for (const sim::SimObject& obj : robot.world().objects()) {
-    const Pose3 X_WO = robot.world().BodyPose(obj.body);
-    int best = -1;
-    double best_d = 1e9;
-    for (size_t k = 0; k < boxes.size(); ++k) {
-      const double d = (boxes[k].X_WO.translation() - X_WO.translation()).norm();
-      if (d < best_d) best_d = d, best = static_cast<int>(k);
-    }
-    nlohmann::json m = {{"object", obj.spec.name},
-                        {"box", best < 0 ? nlohmann::json(nullptr) : nlohmann::json(best)}};
-    if (best >= 0) {
-      const sim::BoxError e =
-          sim::CompareBox(X_WO, obj.spec.size_O, boxes[best].X_WO, boxes[best].size_O);
-      m["center_error_m"] = e.center_m;
-      m["edge_error_m"] = Vec(e.edge_m);
-      m["yaw_error_deg"] = RadToDeg(e.yaw_rad);
-      spdlog::info(
-          "  {}: box {} ({}) centre {:.1f} mm, edges {:.1f} {:.1f} {:.1f} mm, yaw {:.2f} deg",
-          obj.spec.name, best, colours[best].name(), 1e3 * e.center_m, 1e3 * e.edge_m.x(),
-          1e3 * e.edge_m.y(), 1e3 * e.edge_m.z(), RadToDeg(e.yaw_rad));
-    } else {
-      spdlog::info("  {}: no box", obj.spec.name);
-    }
-    matches.push_back(m);
-  }
-  truth["boxes"] = matches;
-  if (grasp_plan) {
-    // How far each contact lies from the true surface of the object the target box models.
-    const sim::SimObject* object = nullptr;
-    double best_d = 1e9;
+  // Ground truth (only where the devices are the simulator's): each true object against the
+  // fitted box nearest to it.
+  if (AllSimulated(scenario)) {
+    nlohmann::json truth = sim::TruthJson(robot.world(), robot.rig(), {});
+    nlohmann::json matches = nlohmann::json::array();
     for (const sim::SimObject& obj : robot.world().objects()) {
-      const double d =
-          (robot.world().BodyPose(obj.body).translation() - boxes[*target].X_WO.translation())
-              .norm();
-      if (d < best_d) best_d = d, object = &obj;
-    }
-    if (object != nullptr) {
-      const Pose3 X_WO = robot.world().BodyPose(object->body);
-      nlohmann::json d = nlohmann::json::array();
-      for (const Eigen::Vector3d& c : grasp_plan->contacts_W) {
-        d.push_back(sim::DistanceToBoxSurface(X_WO, object->spec.size_O, c));
+      const Pose3 X_WO = robot.world().BodyPose(obj.body);
+      int best = -1;
+      double best_d = 1e9;
+      for (size_t k = 0; k < boxes.size(); ++k) {
+        const double d = (boxes[k].X_WO.translation() - X_WO.translation()).norm();
+        if (d < best_d) best_d = d, best = static_cast<int>(k);
       }
-      truth["grasp"] = {{"object", object->spec.name}, {"contact_to_surface_m", d}};
-      spdlog::info("  grasp of {}: contacts {:.1f} and {:.1f} mm from its true faces",
-                   object->spec.name, 1e3 * d[0].get<double>(), 1e3 * d[1].get<double>());
+      nlohmann::json m = {{"object", obj.spec.name},
+                          {"box", best < 0 ? nlohmann::json(nullptr) : nlohmann::json(best)}};
+      if (best >= 0) {
+        const sim::BoxError e =
+            sim::CompareBox(X_WO, obj.spec.size_O, boxes[best].X_WO, boxes[best].size_O);
+        m["center_error_m"] = e.center_m;
+        m["edge_error_m"] = Vec(e.edge_m);
+        m["yaw_error_deg"] = RadToDeg(e.yaw_rad);
+        spdlog::info(
+            "  {}: box {} ({}) centre {:.1f} mm, edges {:.1f} {:.1f} {:.1f} mm, yaw {:.2f} deg",
+            obj.spec.name, best, colours[best].name(), 1e3 * e.center_m, 1e3 * e.edge_m.x(),
+            1e3 * e.edge_m.y(), 1e3 * e.edge_m.z(), RadToDeg(e.yaw_rad));
+      } else {
+        spdlog::info("  {}: no box", obj.spec.name);
+      }
+      matches.push_back(m);
     }
+    truth["boxes"] = matches;
+    if (grasp_plan) {
+      // How far each contact lies from the true surface of the object the target box models.
+      const sim::SimObject* object = nullptr;
+      double best_d = 1e9;
+      for (const sim::SimObject& obj : robot.world().objects()) {
+        const double d =
+            (robot.world().BodyPose(obj.body).translation() - boxes[*target].X_WO.translation())
+                .norm();
+        if (d < best_d) best_d = d, object = &obj;
+      }
+      if (object != nullptr) {
+        const Pose3 X_WO = robot.world().BodyPose(object->body);
+        nlohmann::json d = nlohmann::json::array();
+        for (const Eigen::Vector3d& c : grasp_plan->contacts_W) {
+          d.push_back(sim::DistanceToBoxSurface(X_WO, object->spec.size_O, c));
+        }
+        truth["grasp"] = {{"object", object->spec.name}, {"contact_to_surface_m", d}};
+        spdlog::info("  grasp of {}: contacts {:.1f} and {:.1f} mm from its true faces",
+                     object->spec.name, 1e3 * d[0].get<double>(), 1e3 * d[1].get<double>());
+      }
+    }
+    report["truth"] = truth;
   }
-  report["truth"] = truth;
 
   fs::create_directories(o.out_dir);
   const fs::path out(o.out_dir);

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.h"
+#include "app/devices.h"
 #include "common/paths.h"
 #include "robot/calibration.h"
 #include "robot/head_kinematics.h"
@@ -40,10 +41,19 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
   const auto head = Head();
   sim::SimRobot robot(scenario);
-  device::RobotDevices dev = robot.TakeDevices();
+  device::RobotDevices dev = MakeDevices(scenario, &robot);
   scan::LaserCalibrationReport report;
   const scan::SweepConfig sweep;
   const robot::LaserCalibration cal = scan::CalibrateLaser(dev, head, cameras, sweep, {}, &report);
+
+  fs::path out(o.out_file);
+  if (out.has_parent_path()) fs::create_directories(out.parent_path());
+  robot::SaveLaserCalibration(cal, o.out_file);
+  spdlog::info(
+      "calibrate laser: {} of {} stripe positions used, eq. 5 residue RMS {:.3f} px; wrote {} "
+      "({:.1f} s)",
+      report.counts_used, report.frames, report.rms_residue_px, o.out_file, Seconds(t0));
+  if (!AllSimulated(scenario)) return 0;
 
   // Ground truth: the calibrated plane against the simulator's at every count of the sweep.
   device::HeadState hs;
@@ -53,14 +63,10 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   const std::int32_t hi = std::max(sweep.start_count, sweep.end_count);
   const sim::LaserPlaneError error = sim::CompareLaserPlanes(
       robot.rig(), [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, lo, hi);
-  fs::path out(o.out_file);
-  if (out.has_parent_path()) fs::create_directories(out.parent_path());
-  robot::SaveLaserCalibration(cal, o.out_file);
   spdlog::info(
-      "calibrate laser: {} of {} stripe positions used, eq. 5 residue RMS {:.3f} px; against the "
-      "simulator's planes over counts {}..{}: worst {:.4f} deg, {:.3f} mm; wrote {} ({:.1f} s)",
-      report.counts_used, report.frames, report.rms_residue_px, lo, hi, error.worst_deg,
-      error.worst_mm, o.out_file, Seconds(t0));
+      "calibrate laser: against the simulator's planes over counts {}..{}: worst {:.4f} deg, "
+      "{:.3f} mm",
+      lo, hi, error.worst_deg, error.worst_mm);
   return 0;
 }
 
@@ -70,7 +76,7 @@ int Scan(const ScanOptions& o) {
   const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
   const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
   sim::SimRobot robot(scenario);
-  device::RobotDevices dev = robot.TakeDevices();
+  device::RobotDevices dev = MakeDevices(scenario, &robot);
   scan::StripeFrameConfig config;
   config.stereo = !o.single_camera;
   scan::Scanner scanner(Head(), cameras, laser, config);
@@ -109,7 +115,7 @@ int Scan(const ScanOptions& o) {
                     {"p99_to_surface_m", percentile(0.99)},
                     {"beyond_5mm", beyond_5mm},
                     {"mode", o.single_camera ? "single_camera" : "stereo"}};
-  report["truth"] = truth;
+  if (AllSimulated(scenario)) report["truth"] = truth;  // what the devices saw is the sim's
 
   fs::create_directories(o.out_dir);
   scan::WritePly(result.range, (fs::path(o.out_dir) / "range.ply").string());

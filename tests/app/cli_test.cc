@@ -48,7 +48,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"bad_negative_size.yaml", "objects[1].size", "[0.06, -0.09, 0.12]"},
                       BadCase{"bad_off_table.yaml", "objects[0].position", "[0.86, 0.0]"},
                       BadCase{"bad_duplicate_name.yaml", "objects[1].name", "twin"},
-                      BadCase{"no_such_file.yaml", "no_such_file.yaml", "no_such_file.yaml"}));
+                      BadCase{"no_such_file.yaml", "no_such_file.yaml", "no_such_file.yaml"},
+                      BadCase{"bad_driver.yaml", "devices.head.driver", "pmd9000"},
+                      BadCase{"bad_device_port.yaml", "devices.arm_left.port", "serial port"},
+                      BadCase{"bad_device_baud.yaml", "devices.hand_left.baud", "9601"}));
 
 TEST(CliTest, UsageErrorsExitTwo) {
   EXPECT_EQ(RunHgrasp("").status, 2);

@@ -1,0 +1,166 @@
+#pragma once
+/// @file The Biclops pan/tilt/verge head behind device::Head, over the PMD motion chip's serial
+/// protocol (drivers/biclops/PROTOCOL.md). One chip drives the three axes: pan (chip axis 0),
+/// tilt (1) and verge (2), each a trapezoidal profile to a target at the axis speed limit.
+///
+/// No command is executed twice or altered: a Set* is sent only when the register differs from
+/// the value sent, so after a lost or garbled reply the driver resynchronises and reads the
+/// register back (GetPosition, GetVelocity, GetAcceleration, GetProfileMode) to learn whether it
+/// took effect; an Update is sent only when the axis' active target changes, and after an
+/// unclear reply the driver waits for the profile to end and reads where it ended
+/// (GetCommandedPosition): at the new target the Update happened, at the old one it did not.
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "biclops/pmd_codec.h"
+#include "device/head.h"
+#include "serial/byte_link.h"
+
+namespace hgrasp::drivers {
+
+/// One Biclops axis (SI units).
+struct BiclopsAxisOptions {
+  /// Encoder counts per radian of joint motion; negative when the joint's positive sense
+  /// (device/head.h) runs against the encoder's.
+  double counts_per_rad = 12000.0 / (2.0 * 3.14159265358979323846);
+  double min_rad = -1.0;  ///< joint range: targets outside it are rejected (kRejected)
+  double max_rad = 1.0;
+  double max_speed_rad_s = 1.0;   ///< > 0: the profile velocity of every move
+  double max_accel_rad_s2 = 1.0;  ///< > 0: the profile acceleration
+};
+
+struct BiclopsOptions {
+  /// Pan, tilt, verge (chip axes 0, 1, 2).
+  std::array<BiclopsAxisOptions, 3> axes;
+  /// Wait for a complete reply after sending a packet (9600 baud: 6 bytes take 6 ms).
+  double reply_timeout_s = 0.1;
+  /// During resynchronisation: the longest wait for an answer after each 0x00 byte (the
+  /// driver waits four measured round trips, at least 3 ms, at most this).
+  double resync_byte_timeout_s = 0.02;
+  /// A call gives up with kTimeout once nothing at all has come from the chip for this long
+  /// (a cut cable is reported within this time plus one wait).
+  double silence_timeout_s = 0.4;
+  /// Re-sends of one command known not to have been executed (TRACLabs libPMD tries 4 times;
+  /// the read-back lets us try more safely).
+  int max_resends = 8;
+  /// Margin on the longest move when waiting for a profile to end (after an unclear Update).
+  double settle_margin_s = 1.0;
+};
+
+/// Biclops defaults: 12000 counts per joint turn (0.03 deg/count; TRACLabs BiclopsDefault.cfg:
+/// 2000 counts per encoder cycle, 6 encoder cycles per axis turn), pan +-180 deg at 150 deg/s
+/// (published) and 300 deg/s^2 (BiclopsDefault.cfg run profile), tilt +-60 deg (published) at
+/// 150 deg/s (ours, as models/humanoid.xml) and 80 deg/s^2 (BiclopsDefault.cfg), verge -5..25 deg
+/// at 100 deg/s (ours, as models/humanoid.xml) and 200 deg/s^2 (ours).
+BiclopsOptions DefaultBiclopsOptions();
+
+/// What the driver went through (for reports and tests).
+struct BiclopsCounters {
+  std::uint64_t exchanges = 0;      ///< packets sent expecting a reply
+  std::uint64_t timeouts = 0;       ///< no complete reply in time
+  std::uint64_t garbled = 0;        ///< replies with a bad sum or surplus bytes
+  std::uint64_t error_replies = 0;  ///< replies with a non-zero chip status
+  std::uint64_t resyncs = 0;        ///< NoOperation resynchronisations
+  std::uint64_t readbacks = 0;      ///< registers read back after an unclear Set* reply
+  std::uint64_t update_checks = 0;  ///< profile ends awaited after an unclear Update reply
+  std::uint64_t resends = 0;        ///< commands re-sent, known not to have been executed
+  std::uint64_t disconnects = 0;    ///< calls that met a vanished port
+};
+
+class BiclopsHead final : public device::Head {
+ public:
+  /// `link`: the serial line (9600 8N1), or a decorator over it. Throws InputError on bad
+  /// options (field and value named).
+  explicit BiclopsHead(std::unique_ptr<ByteLink> link,
+                       const BiclopsOptions& options = DefaultBiclopsOptions());
+
+  /// Joint angles (GetActualPosition) and whether any axis' profile is running
+  /// (GetActivityStatus, in-motion bit). t_s: seconds since the driver was made (host clock).
+  device::Status Read(device::HeadState* state) override;
+  /// Starts every axis towards its target at the axis speed limit (returns once the chip has
+  /// the moves; see Read for their progress). kRejected for a target outside the joint range.
+  device::Status MoveTo(const device::HeadJoints& target) override;
+
+  /// Synchronises with the chip, checks its version (three axes at least), reads its cycle
+  /// time and sets every axis' profile mode, velocity and acceleration where they differ.
+  /// Called by MoveTo when needed.
+  device::Status Initialize();
+  /// Resets the chip (all registers and position counters to 0: the head loses its homing).
+  /// Sent once: the driver confirms it by reading a velocity register back.
+  device::Status ResetChip();
+
+  /// GetVersion words (after Initialize).
+  std::uint16_t version_chip() const { return version_chip_; }
+  std::uint16_t version_software() const { return version_software_; }
+  /// The chip's cycle time (after Initialize), s.
+  double cycle_s() const { return cycle_s_; }
+  /// The velocity and acceleration registers sent for `axis` (after Initialize).
+  std::int32_t velocity_register(int axis) const { return velocity_reg_[Index(axis)]; }
+  std::uint32_t acceleration_register(int axis) const { return accel_reg_[Index(axis)]; }
+  /// `target` in encoder counts, as MoveTo sends it.
+  std::array<std::int32_t, 3> ToCounts(const device::HeadJoints& target) const;
+  BiclopsCounters counters() const;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  /// What the driver knows of one chip register.
+  struct Known {
+    bool known = false;
+    std::int64_t value = 0;
+  };
+  enum Register { kPosition = 0, kVelocity, kAcceleration, kProfileMode, kRegisters };
+
+  static std::size_t Index(int axis) { return static_cast<std::size_t>(axis); }
+  void BeginCall();
+  double SilenceLeft() const;
+  /// One read from the link, keeping track of silence. kTimeout when nothing came.
+  device::Status ReadLink(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n);
+  /// Reads until the line is quiet for `quiet_s`, then drops everything received.
+  device::Status Drain(double quiet_s);
+  /// One packet out and its reply in: kOk with *reply (any chip status), kTimeout, kBadReply
+  /// (garbled), kDisconnected.
+  device::Status Exchange(const pmd::Command& command, int result_words, pmd::Reply* reply);
+  /// 0x00 bytes until the chip answers, then a GetVersion that must come back clean.
+  device::Status Resync();
+  /// How long to wait for an answer to each 0x00 byte.
+  double ZeroWait() const;
+  device::Status SyncIfNeeded();
+  /// A Get* (no side effects): retried until a clean status-0 reply.
+  device::Status Query(int axis, std::uint8_t opcode, int result_words, pmd::Reply* reply);
+  device::Status ReadRegister(int axis, Register r, std::int64_t* value);
+  /// Sets a register unless it already holds `value`; never twice (see the file comment).
+  device::Status WriteRegister(int axis, Register r, std::int64_t value);
+  /// Waits until the axis' profile has ended and learns its active target.
+  device::Status ResolveActive(int axis);
+  /// Makes `target` the axis' active target with one Update (none when it already is).
+  device::Status UpdateTo(int axis, std::int64_t target);
+  /// After a failure that may leave the chip mid-packet or the mirrors stale.
+  device::Status Fail(device::Status s);
+  device::Status EnsureInitialized();
+
+  std::unique_ptr<ByteLink> link_;
+  BiclopsOptions options_;
+  mutable std::mutex mu_;
+  pmd::ReplyDecoder decoder_;
+  Clock::time_point created_, call_start_, last_rx_;
+  bool silent_ = false;
+  bool need_sync_ = true;
+  bool initialized_ = false;
+  std::array<std::array<Known, kRegisters>, 3> reg_{};  ///< buffered registers per axis
+  std::array<Known, 3> active_target_{};                ///< the profile's target per axis
+  std::array<bool, 3> at_rest_{};                       ///< seen at rest, and no Update sent since
+  std::uint16_t version_chip_ = 0, version_software_ = 0;
+  double cycle_s_ = 0.0;
+  std::array<std::int32_t, 3> velocity_reg_{};
+  std::array<std::uint32_t, 3> accel_reg_{};
+  double longest_move_s_ = 0.0;
+  double rtt_s_ = 0.0;  ///< mean time from a packet to its complete reply
+  BiclopsCounters counters_;
+};
+
+}  // namespace hgrasp::drivers

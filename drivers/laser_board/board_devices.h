@@ -1,0 +1,44 @@
+#pragma once
+/// @file The device seam (src/device/) over the laser board: its stripe laser and its gripper
+/// LEDs, two thin adapters sharing one LaserBoard.
+
+#include <memory>
+
+#include "device/leds.h"
+#include "device/stripe_laser.h"
+#include "laser_board/laser_board.h"
+
+namespace hgrasp::drivers {
+
+/// device::StripeLaser on the laser board: laser diode, motor and encoder.
+class BoardStripeLaser final : public device::StripeLaser {
+ public:
+  /// `board` must not be null.
+  explicit BoardStripeLaser(std::shared_ptr<LaserBoard> board);
+
+  /// The encoder count now; t_s is the board's clock (s since its power-up, 1 ms steps).
+  device::Status Read(device::StripeLaserState* state) override;
+  device::Status SetLaser(bool on) override;
+  /// `speed_counts_s` (> 0, else kRejected) is clamped to the motor's top speed (the option
+  /// max_speed_counts_s) as in the simulation and rounded to whole counts/s (at least 1); the
+  /// board rejects a count outside its travel (kRejected).
+  device::Status MoveTo(std::int32_t count, double speed_counts_s) override;
+
+ private:
+  std::shared_ptr<LaserBoard> board_;
+};
+
+/// device::Leds on the laser board: the red LEDs on both grippers.
+class BoardLeds final : public device::Leds {
+ public:
+  /// `board` must not be null.
+  explicit BoardLeds(std::shared_ptr<LaserBoard> board);
+
+  int Count(device::Side side) const override;
+  device::Status Set(device::Side side, std::uint32_t mask) override;
+
+ private:
+  std::shared_ptr<LaserBoard> board_;
+};
+
+}  // namespace hgrasp::drivers

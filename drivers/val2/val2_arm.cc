@@ -1,0 +1,687 @@
+#include "val2/val2_arm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+namespace hgrasp::drivers {
+namespace {
+
+using device::Status;
+using val2::Reaction;
+
+std::string RTrim(std::string s) {
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+bool StartsWith(const std::string& s, const std::string& prefix) {
+  return s.size() >= prefix.size() && s.compare(0, prefix.size(), prefix) == 0;
+}
+
+std::size_t CommonPrefix(const std::string& a, const std::string& b) {
+  std::size_t k = 0;
+  while (k < a.size() && k < b.size() && a[k] == b[k]) ++k;
+  return k;
+}
+
+// True when `line` has left the controller's input: what is there is much shorter than the line.
+// A line that never ran is still there whole, give or take a few damaged, added or rubbed-out
+// characters (and a retype of it may show it damaged, with bytes changed or inserted); once it
+// ran or was cancelled, only the few stray characters that arrived since.
+bool Gone(const std::string& buf, const std::string& line) {
+  return RTrim(buf).size() * 2 <= line.size();
+}
+
+bool IsPrintable(char c) { return c >= 0x20 && c <= 0x7E; }
+
+// Bytes made readable for a trace.
+std::string Visible(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c >= 0x20 && c <= 0x7E) {
+      out += c;
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "<%02X>", static_cast<unsigned char>(c));
+      out += buf;
+    }
+  }
+  return out + "\"";
+}
+
+// Characters typed (or rubbed out) per write before their echo is checked.
+constexpr std::size_t kChunk = 16;
+
+// The first "*...*" message among output lines (CR LF each); "" when there is none.
+std::string FirstError(const std::string& output) {
+  val2::OutputDecoder dec;
+  dec.Feed(output);
+  val2::OutputUnit u;
+  while (dec.Flush(&u)) {
+    if (u.kind != val2::OutputUnit::Kind::kLine) continue;
+    if (auto m = val2::ParseErrorLine(u.text)) return *m;
+  }
+  return "";
+}
+
+// The WHERE report from the output of WHERE: exactly four lines.
+bool ParseWhereOutput(const std::string& output, val2::WhereReport* report) {
+  val2::OutputDecoder dec;
+  dec.Feed(output);
+  std::array<std::string, 4> lines;
+  std::size_t n = 0;
+  val2::OutputUnit u;
+  while (dec.Flush(&u)) {
+    if (u.kind != val2::OutputUnit::Kind::kLine || n == lines.size()) return false;
+    lines[n++] = u.text;
+  }
+  return n == lines.size() && val2::ParseWhere(lines, report);
+}
+
+}  // namespace
+
+Val2Arm::Val2Arm(std::unique_ptr<ByteLink> link, const Val2Options& options)
+    : link_(std::move(link)), opt_(options), start_(Clock::now()) {}
+
+Val2Arm::CallClock Val2Arm::StartCall() const {
+  CallClock c;
+  c.start = c.last_heard = Clock::now();
+  c.silence_s = opt_.silence_budget_s;
+  c.max_s = opt_.max_call_s;
+  return c;
+}
+
+Val2Arm::Clock::time_point Val2Arm::CallClock::Deadline() const {
+  auto d = [](double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  return std::min(last_heard + d(silence_s), start + d(max_s));
+}
+
+double Val2Arm::Now() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
+// ---------------------------------------------------------------------------------------------
+// The seam.
+
+Status Val2Arm::Read(device::ArmState* state) {
+  CallClock call = StartCall();
+  Status s = DrainStale();
+  if (s != Status::kOk) return Fail(s);
+  if (lost_) {
+    s = Recover(&call);
+    if (s != Status::kOk) return Fail(s);
+  }
+  if (pending_) {
+    // A failed command still unresolved: a read is not its retry, so it must not run now.
+    bool ran = false;
+    s = Dispose(*pending_, &call, &ran);
+    if (s != Status::kOk) return Fail(s);
+    if (ran) {
+      executed_record_ = *pending_;
+    } else {
+      ++counters_.cancelled_pending;
+    }
+    pending_.reset();
+  }
+  val2::WhereReport report;
+  double t = 0.0;
+  s = Where(&call, &report, &t);
+  if (s == Status::kOk && opt_.confirm_reads) {
+    // A second report must agree with the first within the motion possible between them.
+    for (;;) {
+      val2::WhereReport second;
+      double t2 = 0.0;
+      s = Where(&call, &second, &t2);
+      if (s != Status::kOk) break;
+      bool agree = true;
+      for (int k = 0; k < 6; ++k) {
+        const double allowed = opt_.max_joint_speed_deg_s[k] * (t2 - t) * 1.5 + 0.0015;
+        if (std::abs(second.joints[k] - report.joints[k]) > allowed) agree = false;
+      }
+      report = second;
+      t = t2;
+      if (agree) break;
+      ++counters_.bad_where;
+    }
+  }
+  if (s == Status::kRejected) return s;
+  if (s != Status::kOk) return Fail(s);
+  bool changed = false;
+  for (int k = 0; k < 6; ++k) {
+    state->q[k] = DegToRad(report.joints[k]);
+    if (have_prev_ && std::abs(report.joints[k] - prev_deg_[k]) > 0.0005) changed = true;
+  }
+  state->t_s = t;
+  state->qd.setZero();
+  if (have_prev_ && t - prev_t_ > 1e-3) {
+    for (int k = 0; k < 6; ++k) {
+      state->qd[k] = DegToRad(report.joints[k] - prev_deg_[k]) / (t - prev_t_);
+    }
+  }
+  state->moving = changed || motion_since_read_;
+  motion_since_read_ = false;
+  have_prev_ = true;
+  prev_t_ = t;
+  prev_deg_ = report.joints;
+  needs_read_ = false;
+  ++counters_.reads;
+  return Status::kOk;
+}
+
+Status Val2Arm::Where(CallClock* call, val2::WhereReport* report, double* t_s) {
+  const std::string line = val2::Encode(val2::WhereCommand());
+  for (;;) {
+    LineOutcome out;
+    const Status s = Drive(line, /*state_changing=*/false, /*resume=*/false, call, &out);
+    if (s != Status::kOk) return s;
+    if (out.output_known && ParseWhereOutput(out.output, report)) {
+      *t_s = Now();
+      return Status::kOk;
+    }
+    ++counters_.bad_where;  // WHERE changes nothing: ask again
+  }
+}
+
+Status Val2Arm::MoveJoints(const device::Joint6& q_target) {
+  std::array<double, 6> deg;
+  for (int k = 0; k < 6; ++k) {
+    deg[k] = RadToDeg(q_target[k]);
+    if (!std::isfinite(deg[k]) || std::abs(deg[k]) >= 10000.0) {
+      last_error_ = "joint angle not representable: " + std::to_string(deg[k]) + " deg";
+      return Status::kRejected;
+    }
+  }
+  return Command(val2::Encode(val2::MoveJointsCommand(deg)), false, true);
+}
+
+Status Val2Arm::MoveRelative(const Pose3& X_EEnew) {
+  const val2::Trans t = val2::PoseToTrans(X_EEnew);
+  const std::string line = val2::Encode(val2::MoveRelativeCommand(t));
+  if (!X_EEnew.matrix().allFinite() || std::abs(t.x) >= 10000.0 || std::abs(t.y) >= 10000.0 ||
+      std::abs(t.z) >= 10000.0 || line.size() > val2::kMaxLineLength) {
+    last_error_ = "relative move not representable: " + line;
+    return Status::kRejected;
+  }
+  return Command(line, false, true);
+}
+
+Status Val2Arm::SetSpeed(double fraction) {
+  const double percent = fraction * 100.0;
+  double printed = 0.0;
+  if (!std::isfinite(fraction) || fraction > 1.0 ||
+      !val2::ParseNumber(val2::FormatFixed(percent, val2::kPercentDecimals), &printed) ||
+      printed <= 0.0) {
+    last_error_ = "speed fraction outside (0, 1]: " + std::to_string(fraction);
+    return Status::kRejected;
+  }
+  return Command(val2::Encode(val2::SpeedCommand(percent)), false, false);
+}
+
+Status Val2Arm::Stop() { return Command(val2::Encode(val2::AbortCommand()), true, true); }
+
+Status Val2Arm::Ready() { return Command(val2::Encode(val2::ReadyCommand()), false, true); }
+
+// ---------------------------------------------------------------------------------------------
+// Commands.
+
+Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion) {
+  CallClock call = StartCall();
+  Status s = DrainStale();
+  if (s != Status::kOk) return Fail(s);
+  if (lost_) {
+    s = Recover(&call);
+    if (s != Status::kOk) return Fail(s);
+    if (is_stop) return Status::kOk;  // the recovery's ABORT was this stop
+  }
+  if (needs_read_ && !is_stop) {
+    last_error_ = "link was lost: Read() the arm before moving it";
+    return Status::kDisconnected;
+  }
+  // A failed command found executed by a Read since: this call is its retry.
+  const std::optional<std::string> record = std::exchange(executed_record_, std::nullopt);
+  if (record && *record == line) {
+    ++counters_.resolved_retries;
+    ++counters_.commands;
+    if (is_motion) motion_since_read_ = true;
+    return Status::kOk;
+  }
+  bool resume = false;
+  if (pending_) {
+    if (*pending_ == line) {
+      resume = true;  // the retry of the failed call: complete it, never repeat it
+    } else {
+      bool ran = false;
+      s = Dispose(*pending_, &call, &ran);
+      if (s != Status::kOk) return Fail(s);
+      if (!ran) ++counters_.cancelled_pending;
+    }
+    pending_.reset();
+  }
+  LineOutcome out;
+  s = Drive(line, /*state_changing=*/true, resume, &call, &out);
+  if (s == Status::kOk) {
+    if (resume && !out.output_known) ++counters_.resolved_retries;
+    ++counters_.commands;
+    if (is_motion) motion_since_read_ = true;
+    return s;
+  }
+  if (s == Status::kRejected || s == Status::kBadReply) return s;
+  return Fail(s);
+}
+
+Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
+                      LineOutcome* outcome) {
+  *outcome = LineOutcome{};
+  bool armed = resume;    // the whole line may be in the controller's input, or have run
+  bool verified = false;  // a ^R answer showed exactly the line
+  // While armed: traces of a cancel, and of an execution, in answers since.
+  bool cancel_trace = false, execution_trace = false;
+  int suspect = 0;  // ^R answers near the line but not it, in a row
+  int errors = 0;   // lines that ran with "not understood"
+  for (;;) {
+    if (Clock::now() >= call->Deadline()) {
+      if (state_changing && armed) pending_ = line;
+      if (opt_.trace) opt_.trace("timeout; armed " + std::to_string(armed));
+      return Status::kTimeout;
+    }
+    std::string send;
+    std::string expected;
+    double timeout = opt_.reply_timeout_s;
+    bool probe_again = false;
+    const bool armed_before = armed;
+    if (!known_) {
+      send = val2::kCtrlR;  // what does the controller hold?
+      ++counters_.probes;
+      if (armed && std::find(guesses_.begin(), guesses_.end(), line) == guesses_.end()) {
+        guesses_.push_back(line);
+      }
+    } else if (armed && Gone(buf_, line) && cancel_trace && !execution_trace) {
+      armed = false;  // gone, and the answers show a cancel and no execution: it did not run
+      continue;
+    } else if (armed && Gone(buf_, line)) {
+      // The line has left the controller's input: it ran, and its answer was lost. (A line
+      // that never ran is still there, give or take a corrupted byte or two.)
+      if (!state_changing) {
+        armed = false;  // WHERE: just ask again
+        continue;
+      }
+      outcome->executed = true;
+      outcome->output_known = false;
+      return Status::kOk;
+    } else if (buf_ == line) {
+      armed = true;
+      if (state_changing && !verified) {
+        send = val2::kCtrlR;  // check the whole line once more before it runs
+        expected = val2::RetypeEcho(buf_);
+        ++counters_.probes;
+      } else {
+        send = val2::kCr;
+        expected = std::string("\r\n") + val2::kPrompt;
+      }
+    } else if (RTrim(buf_) == line) {
+      send = val2::kDel;  // the command and a blank (which VAL would ignore): rub it out
+      expected = std::string(val2::kRuboutEcho);
+      ++counters_.rubouts;
+    } else if (armed && suspect < 2) {
+      send = val2::kCtrlR;  // not the command, if this retype is right: look again
+      expected = val2::RetypeEcho(line);
+      probe_again = true;
+      ++counters_.probes;
+    } else {
+      // The controller holds something else than the command (seen more than once): it cannot
+      // run as the command. Type on, rub out, or start again.
+      armed = false;
+      if (StartsWith(line, buf_)) {
+        // A command's last character goes alone, once the rest is known to be right: with the
+        // rest typed in chunks, a damaged chunk can leave the line wrong but never complete (no
+        // part of a command is a command), so a stray CR cannot run it.
+        const std::size_t rest = line.size() - buf_.size();
+        const std::size_t n = !state_changing ? rest : rest > 1 ? std::min(rest - 1, kChunk) : 1;
+        send = line.substr(buf_.size(), n);
+        expected = send;
+        timeout = opt_.echo_timeout_s;
+        if (buf_.size() + n == line.size()) armed = true;
+        counters_.typed += static_cast<long>(n);
+      } else if (buf_.size() - CommonPrefix(buf_, line) <= kChunk) {
+        const std::size_t n = buf_.size() - CommonPrefix(buf_, line);
+        send = std::string(n, val2::kDel);  // wrong characters at the end
+        for (std::size_t k = 0; k < n; ++k) expected += val2::kRuboutEcho;
+        counters_.rubouts += static_cast<long>(n);
+      } else {
+        send = val2::kCtrlU;  // start the line again
+        expected = val2::CancelEcho();
+        ++counters_.cancels;
+      }
+    }
+    suspect = probe_again ? suspect + 1 : 0;
+
+    Reaction r;
+    std::optional<std::string> ran;
+    const std::string before = buf_;
+    if (armed && !armed_before) cancel_trace = execution_trace = false;  // armed just now
+    const Status s = Step(send, expected, timeout, call, &r, &ran);
+    if (armed) {
+      cancel_trace |= saw_cancel_;
+      execution_trace |= saw_execution_;
+    }
+    if (s != Status::kOk) {
+      if (state_changing && armed) pending_ = line;
+      return s;
+    }
+    if (r.kind == Reaction::Kind::kRetype) {
+      verified = r.text == line;
+    } else if (!known_ || buf_ != before) {
+      verified = false;
+    }
+    if (r.kind == Reaction::Kind::kCancel) armed = false;
+    if (r.kind != Reaction::Kind::kExecuted) continue;
+
+    // A line ran. Only the command itself (no part of it is a command; a damaged one is not a
+    // command) or an empty line runs without a message: a success from a line that was not
+    // empty (as far as the driver knew, or, not knowing, with the command complete) is the
+    // command's.
+    const bool was_line = ran ? !RTrim(*ran).empty() : armed;
+    armed = false;
+    verified = false;
+    const std::string error = FirstError(r.text);
+    if (!error.empty()) last_error_ = error;
+    if (!state_changing) {
+      if (!r.text.empty() && error.empty()) {
+        outcome->executed = true;  // the caller parses it: anything else is asked again
+        outcome->output = r.text;
+        return Status::kOk;
+      }
+      if (!error.empty() && ++errors >= opt_.max_errors) return Status::kBadReply;
+      continue;  // a partial or garbled WHERE ran: it changes nothing, type it again
+    }
+    if (r.text.empty()) {
+      if (was_line) {
+        outcome->executed = true;
+        return Status::kOk;
+      }
+      continue;  // an empty line
+    }
+    // A message: the line changed nothing (the commands print nothing when they succeed). A
+    // refusal (as opposed to "not understood") can only be the command's: it is the only valid
+    // line. Any other message, or a damaged one, is taken as a damaged line and typed again.
+    if (val2::IsRefusal(error)) {
+      outcome->error = error;
+      return Status::kRejected;  // refused by the controller (out of range, ...)
+    }
+    if (++errors >= opt_.max_errors) {
+      if (error.empty()) last_error_ = "unreadable answer: " + r.text;
+      return Status::kBadReply;
+    }
+    // A partial or garbled line ran and was refused: type the command again.
+  }
+}
+
+Status Val2Arm::Dispose(const std::string& pending, CallClock* call, bool* executed) {
+  *executed = false;
+  bool armed = true;  // the pending line may be complete in the controller, or have run
+  bool cancel_trace = false, execution_trace = false;
+  for (;;) {
+    if (Clock::now() >= call->Deadline()) return Status::kTimeout;
+    std::string send;
+    std::string expected;
+    if (!known_) {
+      send = val2::kCtrlR;
+      ++counters_.probes;
+      if (armed && std::find(guesses_.begin(), guesses_.end(), pending) == guesses_.end()) {
+        guesses_.push_back(pending);
+      }
+    } else if (buf_.empty()) {
+      // Gone without our cancelling it: it ran (unless the answers show only a cancel).
+      if (armed && !(cancel_trace && !execution_trace)) *executed = true;
+      return Status::kOk;
+    } else {
+      if (armed && Gone(buf_, pending) && !(cancel_trace && !execution_trace)) {
+        *executed = true;  // it ran; stray bytes since
+      }
+      armed = false;  // from here on the line is being cancelled, not run
+      send = val2::kCtrlU;
+      expected = val2::CancelEcho();
+      ++counters_.cancels;
+    }
+    Reaction r;
+    std::optional<std::string> ran;
+    const Status s = Step(send, expected, opt_.reply_timeout_s, call, &r, &ran);
+    if (s != Status::kOk) return s;
+    if (armed) {
+      cancel_trace |= saw_cancel_;
+      execution_trace |= saw_execution_;
+    }
+    if (r.kind == Reaction::Kind::kExecuted) {
+      const bool was_line = ran ? !RTrim(*ran).empty() : armed;
+      if (was_line && r.text.empty()) *executed = true;  // only the command runs silently
+      armed = false;
+    }
+  }
+}
+
+Status Val2Arm::Recover(CallClock* call) {
+  const std::string abort_line = val2::Encode(val2::AbortCommand());
+  bool resume = false;
+  if (pending_) {
+    if (*pending_ == abort_line) {
+      resume = true;
+    } else {
+      bool ran = false;  // a command from before the loss never runs now
+      const Status s = Dispose(*pending_, call, &ran);
+      if (s != Status::kOk) return s;
+      if (!ran) ++counters_.cancelled_pending;
+    }
+    pending_.reset();
+  }
+  executed_record_.reset();
+  LineOutcome out;
+  const Status s = Drive(abort_line, /*state_changing=*/true, resume, call, &out);
+  if (s != Status::kOk) return s;
+  ++counters_.safety_aborts;
+  lost_ = false;
+  needs_read_ = true;
+  motion_since_read_ = true;
+  silent_since_.reset();
+  return Status::kOk;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bytes.
+
+Status Val2Arm::Step(const std::string& bytes, const std::string& expected, double timeout_s,
+                     CallClock* call, Reaction* reaction,
+                     std::optional<std::string>* executed_line) {
+  executed_line->reset();
+  const bool was_known = known_;
+  const std::string before = buf_;
+  Status s = link_->Write(std::span<const std::uint8_t>(
+      reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
+  if (s != Status::kOk) {
+    known_ = false;
+    return s;
+  }
+  // The answers that are complete as they stand: the expected one, or, asking what an unknown
+  // line holds, the retype of each likely line.
+  Expect want;
+  if (!expected.empty()) want.exact.push_back(expected);
+  if (bytes.size() == 1 && bytes[0] == val2::kCtrlR) {
+    if (!was_known) {
+      for (const std::string& g : guesses_) want.exact.push_back(val2::RetypeEcho(g));
+    }
+    want.retype = true;
+  }
+  // The echo of a chunk is taken at its length: a chunk cannot complete, run or cancel the
+  // command, so a longer echo (a character damaged into a control character) only leaves bytes
+  // that spoil the next answer, which is then asked again.
+  if (bytes.size() > 1 && IsPrintable(bytes[0])) want.min_length = bytes.size();
+  std::string answer;
+  s = ReadAnswer(want, timeout_s, call, &answer);
+  if (s != Status::kOk) {
+    known_ = false;
+    return s;
+  }
+  if (opt_.trace) {
+    opt_.trace("sent " + Visible(bytes) + " got " + Visible(answer) + " (line " +
+               (was_known ? Visible(before) : std::string("unknown")) + ")");
+  }
+  // Traces of a cancel or an execution anywhere in the answer, for answers too damaged to
+  // classify (a byte inserted into the line, say): the echo of ^U, or a CR LF that is not the
+  // tail of a "^U" or "^R" echo.
+  saw_cancel_ = answer.find("^U\r\n") != std::string::npos;
+  saw_execution_ = false;
+  for (std::size_t i = answer.find("\r\n"); i != std::string::npos;
+       i = answer.find("\r\n", i + 1)) {
+    const bool after_control =
+        i >= 2 && answer[i - 2] == '^' && (answer[i - 1] == 'U' || answer[i - 1] == 'R');
+    if (!after_control) saw_execution_ = true;
+  }
+  const bool typing = IsPrintable(bytes[0]);
+  if (answer == expected && (typing || bytes.size() > 1 || bytes[0] == val2::kDel)) {
+    // The exact echo of characters typed or rubbed out.
+    reaction->kind = typing ? Reaction::Kind::kAppended : Reaction::Kind::kRubout;
+    reaction->text = typing ? answer : "";
+    if (typing) {
+      buf_ += bytes;
+    } else {
+      buf_.resize(buf_.size() - std::min(buf_.size(), bytes.size()));
+    }
+    return Status::kOk;
+  }
+  if (typing) ++counters_.echo_mismatches;
+  if (bytes.size() > 1) {
+    // Several characters and not their echo: the line is unknown. (A chunk never completes a
+    // command, so whatever it did, it did not run or cancel the command.)
+    guesses_ = {before, before + (typing ? bytes : std::string())};
+    if (typing && answer.size() == bytes.size()) guesses_.push_back(before + answer);
+    *reaction = Reaction{Reaction::Kind::kGarbled, ""};
+    known_ = false;
+    return Status::kOk;
+  }
+  // One character, and not its expected answer: what did it do? (A typed character may have
+  // arrived as a control character: ^U cancels the line, CR runs it.)
+  *reaction = val2::ClassifyReaction(answer);
+  if (typing && reaction->kind == Reaction::Kind::kAppended) {
+    // Another character came back: the typed one or its echo was damaged.
+    guesses_ = {before + bytes, before + reaction->text};
+    *reaction = Reaction{Reaction::Kind::kGarbled, ""};
+    known_ = false;
+    return Status::kOk;
+  }
+  switch (reaction->kind) {
+    case Reaction::Kind::kNothing:
+    case Reaction::Kind::kGarbled:
+      if (known_) guesses_ = {before, typing ? before + bytes : before, ""};
+      known_ = false;
+      break;
+    case Reaction::Kind::kAppended:
+      buf_ += reaction->text;  // it arrived as a printable character
+      break;
+    case Reaction::Kind::kRubout:
+      if (!buf_.empty()) {
+        buf_.pop_back();
+      } else {
+        known_ = false;
+      }
+      break;
+    case Reaction::Kind::kBell:
+      break;  // refused: the line is unchanged
+    case Reaction::Kind::kCancel:
+      known_ = true;
+      buf_.clear();
+      break;
+    case Reaction::Kind::kRetype:
+      if (!was_known &&
+          std::find(guesses_.begin(), guesses_.end(), reaction->text) == guesses_.end() &&
+          reaction->text != tentative_view_) {
+        // An unexpected line, perhaps a damaged retype: believed once seen twice.
+        tentative_view_ = reaction->text;
+        break;
+      }
+      known_ = true;
+      buf_ = reaction->text;
+      tentative_view_.clear();
+      break;
+    case Reaction::Kind::kExecuted:
+      if (was_known) *executed_line = before;
+      known_ = true;
+      buf_.clear();
+      break;
+  }
+  return Status::kOk;
+}
+
+Status Val2Arm::ReadAnswer(const Expect& want, double first_byte_timeout_s, CallClock* call,
+                           std::string* answer) {
+  answer->clear();
+  std::uint8_t buf[512];
+  double wait = first_byte_timeout_s;
+  static const std::string kRetypeHead = val2::RetypeEcho("");
+  for (;;) {
+    const double left = std::chrono::duration<double>(call->Deadline() - Clock::now()).count();
+    const double t = std::max(0.0, std::min(wait, left));
+    std::size_t n = 0;
+    const Status s = link_->Read(buf, t, &n);
+    if (s == Status::kDisconnected) return s;
+    if (s != Status::kOk || n == 0) {
+      if (answer->empty() && !silent_since_) {
+        silent_since_ = Clock::now() - std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(t));
+      }
+      return Status::kOk;  // quiet: the answer (perhaps none) is complete
+    }
+    silent_since_.reset();
+    call->last_heard = Clock::now();
+    answer->append(reinterpret_cast<const char*>(buf), n);
+    if (answer->size() > 4096) return Status::kOk;
+    // A retype has no end mark: it is complete at once only when it is the longest line it can
+    // be (a shorter likely line, say an empty one, may be followed by the rest of a longer).
+    std::size_t longest = 0;
+    for (const std::string& c : want.exact) longest = std::max(longest, c.size());
+    for (const std::string& c : want.exact) {
+      if (*answer == c && (!want.retype || c.size() == longest)) return Status::kOk;
+    }
+    if (want.min_length > 0 && answer->size() >= want.min_length) return Status::kOk;
+    if (val2::AnswerComplete(*answer, "")) return Status::kOk;  // an execution and its prompt
+    if (want.retype && answer->size() == longest &&
+        answer->compare(0, kRetypeHead.size(), kRetypeHead) == 0) {
+      // As long as the longest likely line: a damaged copy of it (were the line longer, the
+      // rest would spoil the next answer, and the line be asked again).
+      return Status::kOk;
+    }
+    // A line being executed ("\r\n" echoed, nothing printed yet) may keep the controller busy
+    // for a while; other answers are complete when the line goes quiet.
+    const bool thinking = *answer == "\r\n";
+    wait = thinking ? opt_.reply_timeout_s : opt_.quiet_s;
+  }
+}
+
+Status Val2Arm::DrainStale() {
+  std::uint8_t buf[512];
+  for (int k = 0; k < 64; ++k) {
+    std::size_t n = 0;
+    const Status s = link_->Read(buf, 0.0, &n);
+    if (s == Status::kDisconnected) return s;
+    if (s != Status::kOk || n == 0) return Status::kOk;
+    if (known_) guesses_ = {buf_, ""};
+    known_ = false;  // a late answer: the line may have changed since
+    silent_since_.reset();
+  }
+  return Status::kOk;
+}
+
+Status Val2Arm::Fail(Status s) {
+  if (s == Status::kDisconnected) lost_ = true;
+  if (silent_since_ &&
+      std::chrono::duration<double>(Clock::now() - *silent_since_).count() >= opt_.link_lost_s) {
+    lost_ = true;
+  }
+  if (lost_ && s == Status::kTimeout) {
+    // Report the first timeout as such; once the link counts as lost, say so.
+    return Status::kDisconnected;
+  }
+  return s;
+}
+
+}  // namespace hgrasp::drivers

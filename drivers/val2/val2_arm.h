@@ -1,0 +1,192 @@
+#pragma once
+/// @file A Puma 260 arm through its VAL II controller's console (RS-232, 9600 8N1): the
+/// device::Arm seam over a ByteLink. drivers/val2/PROTOCOL.md describes the protocol.
+///
+/// VAL II has no checksums and no sequence numbers: the driver makes every command safe with
+/// the console itself. The commands are spelled so that no part of one is a command (a stray
+/// CR can only execute an invalid line). The driver types a command in short chunks, its last
+/// character alone, and checks every echo; it asks the monitor to retype the finished line (^R)
+/// and sends the CR only when the retyped line is exactly the command; and when the answer to a
+/// CR is lost it asks (^R) what the monitor holds instead of typing the command again. So a
+/// command is never altered and never executed twice.
+///
+/// Failed calls. A call that returns a failure status may still have been executed once (its
+/// CR may have reached the controller and only the answer been lost). The next state-changing
+/// call with the same arguments is taken as its retry: it completes that command (sends the CR
+/// that was missing, or reports the execution it finds) and never executes it a second time.
+/// Any other call first cancels such a command if it is still sitting unexecuted in the
+/// controller's line.
+///
+/// A lost link (the port gone, or no byte from the controller for link_lost_s): VAL II goes on
+/// with the motion it was last given and then holds its position (it has no watchdog on the
+/// console). The driver sends nothing more while the link is down; when the link answers again
+/// it first cancels any command left unexecuted, then ABORTs (the arm stops where it is), and
+/// it refuses motion and speed commands with kDisconnected until a Read succeeds, so the caller
+/// looks at the arm before moving it again. Stop() is always allowed.
+
+#include <array>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "device/arm.h"
+#include "serial/byte_link.h"
+#include "val2/val2_codec.h"
+
+namespace hgrasp::drivers {
+
+/// Timing and retry settings of Val2Arm. The defaults suit VAL II at 9600 baud (one character
+/// takes 1.04 ms each way) and report a silent link within 0.5 s.
+struct Val2Options {
+  double echo_timeout_s = 0.05;   ///< wait for the echo of one typed character (s)
+  double reply_timeout_s = 0.15;  ///< wait for the first byte of the answer to CR, ^R, ^U, DEL
+  double quiet_s = 0.01;          ///< silence that ends an answer of unknown length (s)
+  /// A call gives up when the controller has been silent this long (s): a cut link is reported
+  /// within this time. A call that keeps getting answers goes on (9600 baud is slow: a WHERE
+  /// report alone takes 0.27 s) up to max_call_s.
+  double silence_budget_s = 0.45;
+  double max_call_s = 5.0;   ///< hard limit of one call (s), e.g. under endless corruption
+  double link_lost_s = 1.0;  ///< silence after which the link counts as lost (s)
+  int max_errors = 4;        ///< messages other than a known refusal tolerated for one command
+  /// Read() takes two WHERE reports and accepts the second only when the joints agree within
+  /// the motion possible between them (max_joint_speed_deg_s): this catches a digit corrupted
+  /// into another digit, which no parse can see (VAL has no checksum). Off by default: a clean
+  /// RS-232 line rarely corrupts a byte, and at 9600 baud it halves the read rate.
+  bool confirm_reads = false;
+  /// Joint speed limits (deg/s) for confirm_reads: the Puma 260's (DESIGN.md).
+  std::array<double, 6> max_joint_speed_deg_s = {120, 120, 165, 575, 430, 400};
+  /// When set, told every exchange with the controller (bytes sent, answer, what the driver
+  /// made of it), for debugging a link.
+  std::function<void(const std::string&)> trace;
+};
+
+/// Diagnostics, for tests and logs.
+struct Val2Counters {
+  long commands = 0;           ///< state-changing commands executed (confirmed)
+  long reads = 0;              ///< WHERE reports parsed
+  long typed = 0;              ///< characters typed
+  long echo_mismatches = 0;    ///< echoes that were not the typed character
+  long probes = 0;             ///< ^R sent to learn or check the line
+  long cancels = 0;            ///< ^U sent
+  long rubouts = 0;            ///< DEL sent
+  long resolved_retries = 0;   ///< failed calls completed by their retry without re-sending
+  long cancelled_pending = 0;  ///< unexecuted commands of failed calls cancelled
+  long safety_aborts = 0;      ///< ABORTs sent after a lost link
+  long bad_where = 0;          ///< WHERE reports that failed the strict parse
+};
+
+class Val2Arm final : public device::Arm {
+ public:
+  /// `link`: the controller's console line (a SerialPort at 9600 8N1, or a FaultyLink over
+  /// one). The controller must be at the VAL II monitor's "." prompt (calibrated, arm power on).
+  explicit Val2Arm(std::unique_ptr<ByteLink> link, const Val2Options& options = {});
+
+  /// WHERE: joint angles (rad), rates estimated from the previous Read (rad/s), and `moving`
+  /// when the joints changed since the previous Read or a motion was commanded since. t_s is
+  /// the host's clock (s since construction): VAL prints no time.
+  device::Status Read(device::ArmState* state) override;
+  /// DO MOVE #PPOINT(JT1..JT6): joint angles in degrees, the URDF's angles one for one.
+  device::Status MoveJoints(const device::Joint6& q_target) override;
+  /// DO APPRO HERE:TRANS(x,y,z,O,A,T),0 (= DO MOVE HERE:TRANS(...)): X_EEnew in mm and VAL's
+  /// O, A, T. kRejected when the controller answers *Position out of range*.
+  device::Status MoveRelative(const Pose3& X_EEnew) override;
+  /// SPEED (percent): fraction (0, 1] of the joint speed limits, to 0.01 %.
+  device::Status SetSpeed(double fraction) override;
+  /// ABORT.
+  device::Status Stop() override;
+  /// DO READY: the arm's READY position (VAL's rest position, joints 0, -90, 90, 0, 0, 0 deg).
+  device::Status Ready();
+
+  /// The last message the controller printed between asterisks ("" when none yet).
+  const std::string& last_error() const { return last_error_; }
+  const Val2Counters& counters() const { return counters_; }
+  /// True while the link counts as lost (see the file comment).
+  bool link_lost() const { return lost_; }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  /// Outcome of driving one command line.
+  struct LineOutcome {
+    bool executed = false;     ///< the line ran (once)
+    bool output_known = true;  ///< false when it ran but its answer was lost
+    std::string output;        ///< its output lines (CR LF each), when known
+    std::string error;         ///< the message between asterisks, if any
+  };
+
+  /// The time limits of one call: it ends when the controller has been silent for
+  /// silence_budget_s, or after max_call_s.
+  struct CallClock {
+    Clock::time_point start, last_heard;
+    double silence_s = 0.45, max_s = 5.0;
+    Clock::time_point Deadline() const;
+  };
+
+  CallClock StartCall() const;
+  /// Runs one state-changing command line (the common path of the commands).
+  device::Status Command(const std::string& line, bool is_stop, bool is_motion);
+  /// One WHERE report, parsed.
+  device::Status Where(CallClock* call, val2::WhereReport* report, double* t_s);
+  /// Drives `line` until it has been executed once: types it, checks it, sends CR, resolves
+  /// lost answers. `resume`: the line may already be complete in the controller (a retry).
+  device::Status Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
+                       LineOutcome* outcome);
+  /// Empties the controller's line without executing `pending` if it is still there. Sets
+  /// *executed when `pending` turns out to have been executed.
+  device::Status Dispose(const std::string& pending, CallClock* call, bool* executed);
+  /// After a lost link: cancel what is pending, ABORT, require a Read.
+  device::Status Recover(CallClock* call);
+
+  /// Sends characters to type (or rub out), or one control character, and reads the
+  /// controller's whole answer; updates the believed line (known_, buf_). On an execution
+  /// reports the line that was executed (if known).
+  device::Status Step(const std::string& bytes, const std::string& expected, double timeout_s,
+                      CallClock* call, val2::Reaction* reaction,
+                      std::optional<std::string>* executed_line);
+  /// Reads until the answer is complete as `want` says, or is an execution with its prompt, or
+  /// the line goes quiet.
+  struct Expect {
+    std::vector<std::string> exact;  ///< answers complete as they stand
+    std::size_t min_length = 0;      ///< > 0: complete at this length (a typed chunk's echo)
+    bool retype = false;             ///< a ^R: complete at the length of an `exact` retype
+  };
+  device::Status ReadAnswer(const Expect& want, double first_byte_timeout_s, CallClock* call,
+                            std::string* answer);
+  /// Throws away bytes nobody asked for (late answers).
+  device::Status DrainStale();
+  /// Bookkeeping of a failed call: silence, lost link. Returns the status to report.
+  device::Status Fail(device::Status s);
+  double Now() const;
+
+  std::unique_ptr<ByteLink> link_;
+  Val2Options opt_;
+  Clock::time_point start_;
+
+  // What the driver believes the monitor's input line holds.
+  bool known_ = false;
+  std::string buf_;
+  std::vector<std::string> guesses_ = {""};  // likely lines while !known_
+  std::string tentative_view_;               // an unexpected retype, believed when seen again
+  bool saw_cancel_ = false, saw_execution_ = false;  // traces in the last answer
+
+  std::optional<std::string> pending_;          // state-changing line of a failed call
+  std::optional<std::string> executed_record_;  // a pending line found executed later
+
+  bool lost_ = false;        // link lost: recover before anything else
+  bool needs_read_ = false;  // after a recovery: motion refused until a Read succeeds
+  std::optional<Clock::time_point> silent_since_;
+
+  // Previous Read, for the rates and `moving`.
+  bool have_prev_ = false;
+  double prev_t_ = 0.0;
+  std::array<double, 6> prev_deg_{};
+  bool motion_since_read_ = false;
+
+  std::string last_error_;
+  Val2Counters counters_;
+};
+
+}  // namespace hgrasp::drivers

@@ -1,0 +1,139 @@
+// The composition root's choice of devices: real drivers on their ports where the scenario says
+// so (here the emulators), the simulated robot's devices elsewhere.
+
+#include "app/devices.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <thread>
+
+#include "biclops/biclops_head.h"
+#include "common/error.h"
+#include "emulators/biclops_emulator.h"
+#include "emulators/emulator.h"
+#include "emulators/laser_board_emulator.h"
+#include "emulators/sensorhand_emulator.h"
+#include "emulators/val2_emulator.h"
+#include "laser_board/board_devices.h"
+#include "sensorhand/sensorhand_hand.h"
+#include "val2/val2_arm.h"
+
+namespace hgrasp::app {
+namespace {
+
+using device::Side;
+using device::Status;
+namespace fs = std::filesystem;
+
+// Polls `done` every 20 ms for at most `timeout_s`.
+bool WaitFor(const std::function<bool()>& done, double timeout_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return done();
+}
+
+TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_devices_test";
+  fs::create_directories(dir);
+  drivers::EmulatorHost arm(drivers::MakeVal2Emulator(Side::kLeft), (dir / "arm_left").string());
+  drivers::EmulatorHost head(drivers::MakeBiclopsEmulator(), (dir / "head").string());
+  drivers::EmulatorHost hand(drivers::MakeSensorHandEmulator(), (dir / "hand_right").string());
+  drivers::EmulatorHost board(drivers::MakeLaserBoardEmulator(), (dir / "board").string());
+  const fs::path file = dir / "emulated.yaml";
+  std::ofstream(file) << "name: emulated\n"
+                         "devices:\n"
+                         "  arm_left: {driver: val2, port: "
+                      << arm.port()
+                      << "}\n"
+                         "  head: {driver: biclops, port: "
+                      << head.port()
+                      << "}\n"
+                         "  hand_right: {driver: sensorhand, port: "
+                      << hand.port()
+                      << "}\n"
+                         "  laser: {driver: laser_board, port: "
+                      << board.port()
+                      << "}\n"
+                         "  leds: {driver: laser_board, port: "
+                      << board.port()
+                      << "}\n"
+                         "  cameras: {driver: sim}\n";
+  const sim::Scenario scenario = sim::LoadScenario(file.string());
+  EXPECT_FALSE(AllSimulated(scenario));
+  sim::SimRobot robot(scenario);
+  device::RobotDevices dev = MakeDevices(scenario, &robot);
+
+  // Which backend each device got.
+  EXPECT_NE(dynamic_cast<drivers::Val2Arm*>(dev.arm[0].get()), nullptr);
+  EXPECT_EQ(dynamic_cast<drivers::Val2Arm*>(dev.arm[1].get()), nullptr);
+  EXPECT_EQ(dynamic_cast<drivers::SensorHandHand*>(dev.hand[0].get()), nullptr);
+  EXPECT_NE(dynamic_cast<drivers::SensorHandHand*>(dev.hand[1].get()), nullptr);
+  EXPECT_NE(dynamic_cast<drivers::BiclopsHead*>(dev.head.get()), nullptr);
+  EXPECT_NE(dynamic_cast<drivers::BoardStripeLaser*>(dev.laser.get()), nullptr);
+  EXPECT_NE(dynamic_cast<drivers::BoardLeds*>(dev.leds.get()), nullptr);
+  ASSERT_NE(dev.cameras, nullptr);
+
+  // Each real device works through the seam.
+  const device::HeadJoints target{0.2, -0.1, 0.05};
+  ASSERT_EQ(dev.head->MoveTo(target), Status::kOk);
+  device::HeadState hs;
+  EXPECT_TRUE(WaitFor([&] { return Ok(dev.head->Read(&hs)) && !hs.moving; }, 5.0));
+  EXPECT_NEAR(hs.q.pan, target.pan, 1e-3);
+  EXPECT_NEAR(hs.q.tilt, target.tilt, 1e-3);
+  EXPECT_NEAR(hs.q.verge, target.verge, 1e-3);
+
+  ASSERT_EQ(dev.laser->SetLaser(true), Status::kOk);
+  ASSERT_EQ(dev.laser->MoveTo(300, 6000.0), Status::kOk);
+  device::StripeLaserState ls;
+  EXPECT_TRUE(WaitFor([&] { return Ok(dev.laser->Read(&ls)) && !ls.moving; }, 3.0));
+  EXPECT_EQ(ls.encoder_count, 300);
+  EXPECT_TRUE(ls.laser_on);
+  EXPECT_EQ(dev.leds->Count(Side::kLeft), 6);
+  EXPECT_EQ(dev.leds->Set(Side::kLeft, 0b101), Status::kOk);
+  EXPECT_EQ(dev.leds->Set(Side::kLeft, 1u << 6), Status::kRejected);
+
+  device::Hand& right_hand = dev.HandOf(Side::kRight);
+  ASSERT_EQ(right_hand.Open(0.06), Status::kOk);
+  device::HandState hand_state;
+  EXPECT_TRUE(WaitFor([&] { return Ok(right_hand.Read(&hand_state)) && !hand_state.moving; }, 3.0));
+  EXPECT_NEAR(hand_state.opening_m, 0.06, 0.002);
+
+  device::Arm& left_arm = dev.ArmOf(Side::kLeft);
+  device::ArmState as;
+  ASSERT_EQ(left_arm.Read(&as), Status::kOk);
+  device::Joint6 q = as.q;
+  q[0] += 0.1;
+  q[5] -= 0.2;
+  ASSERT_EQ(left_arm.MoveJoints(q), Status::kOk);
+  EXPECT_TRUE(WaitFor([&] { return Ok(left_arm.Read(&as)) && !as.moving; }, 5.0));
+  EXPECT_LT((as.q - q).cwiseAbs().maxCoeff(), 1e-4);  // VAL prints 0.001 deg
+}
+
+TEST(MakeDevices, APortThatCannotBeOpenedIsBadInputNamingTheField) {
+  const fs::path file = fs::temp_directory_path() / "hgrasp_devices_no_port.yaml";
+  std::ofstream(file)
+      << "name: no_port\ndevices:\n  head: {driver: biclops, port: /nonexistent/tty}\n";
+  const sim::Scenario scenario = sim::LoadScenario(file.string());
+  sim::SimRobot robot(scenario);
+  try {
+    MakeDevices(scenario, &robot);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), file.string() + ":3");  // the head's entry
+    EXPECT_EQ(e.field(), "devices.head.port");
+    EXPECT_EQ(e.value(), "/nonexistent/tty");
+    EXPECT_NE(std::string(e.what()).find("No such file"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(AllSimulated(
+      sim::LoadScenario(std::string(HGRASP_TEST_DATA) + "/scenarios/good_minimal.yaml")));
+}
+
+}  // namespace
+}  // namespace hgrasp::app

@@ -1,0 +1,368 @@
+// BiclopsHead against the emulated chip over real pseudo-terminals: every seam command (Read,
+// MoveTo), initialisation, Reset, rejection, a cut cable and a port that vanishes.
+
+#include "biclops/biclops_head.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "common/error.h"
+#include "emulators/biclops_emulator.h"
+#include "serial/faulty_link.h"
+#include "serial/serial_port.h"
+
+namespace hgrasp::drivers {
+namespace {
+
+using device::Status;
+namespace op = pmd::op;
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::unique_ptr<SerialPort> OpenPort(const std::string& path) {
+  std::string error;
+  auto port = SerialPort::Open({path, 9600}, &error);
+  EXPECT_TRUE(port) << error;
+  return port;
+}
+
+std::vector<PmdExecuted> Log(EmulatorHost& host) {
+  return host.With([](DeviceEmulator& d) { return dynamic_cast<BiclopsEmulator&>(d).executed(); });
+}
+
+double ChipCounts(EmulatorHost& host, int axis) {
+  return host.With([axis](DeviceEmulator& d) {
+    return dynamic_cast<BiclopsEmulator&>(d).chip().position_counts(axis);
+  });
+}
+
+// Reads until the head stops (or `timeout_s`).
+device::HeadState WaitStill(BiclopsHead& head, double timeout_s = 10.0) {
+  device::HeadState s;
+  const auto t0 = Clock::now();
+  do {
+    EXPECT_EQ(head.Read(&s), Status::kOk);
+  } while (s.moving && Since(t0) < timeout_s);
+  return s;
+}
+
+// Passes bytes through, but damages the exchange of the next packet with a given opcode.
+class ScriptedLink final : public ByteLink {
+ public:
+  enum class Fault { kNone, kLosePacket, kCorruptPacket, kLoseReply, kGarbleReply };
+  explicit ScriptedLink(std::unique_ptr<ByteLink> inner) : inner_(std::move(inner)) {}
+  void Arm(std::uint8_t opcode, Fault fault) {
+    opcode_ = opcode;
+    fault_ = fault;
+  }
+  Status Write(std::span<const std::uint8_t> bytes) override {
+    if (fault_ != Fault::kNone && bytes.size() >= 4 && bytes[3] == opcode_) {
+      const Fault f = fault_;
+      fault_ = Fault::kNone;
+      if (f == Fault::kLosePacket) return Status::kOk;
+      if (f == Fault::kCorruptPacket) {
+        std::vector<std::uint8_t> damaged(bytes.begin(), bytes.end());
+        damaged.back() ^= 0x20;
+        return inner_->Write(damaged);
+      }
+      reply_fault_ = f;
+      reply_bytes_left_ = 2;  // Set* and Update replies
+    }
+    return inner_->Write(bytes);
+  }
+  Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+    const Status s = inner_->Read(buf, timeout_s, n);
+    if (s != Status::kOk || reply_fault_ == Fault::kNone) return s;
+    if (reply_fault_ == Fault::kGarbleReply) {
+      buf[0] ^= 0x01;
+      reply_fault_ = Fault::kNone;
+      return s;
+    }
+    const std::size_t drop = std::min(*n, reply_bytes_left_);
+    std::copy(buf.begin() + static_cast<std::ptrdiff_t>(drop),
+              buf.begin() + static_cast<std::ptrdiff_t>(*n), buf.begin());
+    *n -= drop;
+    reply_bytes_left_ -= drop;
+    if (reply_bytes_left_ == 0) reply_fault_ = Fault::kNone;
+    return *n > 0 ? s : Status::kTimeout;
+  }
+  void Discard() override { inner_->Discard(); }
+
+ private:
+  std::unique_ptr<ByteLink> inner_;
+  std::uint8_t opcode_ = 0;
+  Fault fault_ = Fault::kNone, reply_fault_ = Fault::kNone;
+  std::size_t reply_bytes_left_ = 0;
+};
+
+TEST(BiclopsHead, EachDamagedExchangeLeavesTheCommandExecutedOnce) {
+  using Fault = ScriptedLink::Fault;
+  struct Case {
+    std::uint8_t opcode;
+    Fault fault;
+    bool moving;  ///< the head is still moving from the previous target
+  };
+  const Case cases[] = {
+      {op::kSetPosition, Fault::kLosePacket, false},
+      {op::kSetPosition, Fault::kCorruptPacket, false},
+      {op::kSetPosition, Fault::kLoseReply, false},
+      {op::kSetPosition, Fault::kGarbleReply, false},
+      {op::kUpdate, Fault::kLosePacket, false},
+      {op::kUpdate, Fault::kCorruptPacket, false},
+      {op::kUpdate, Fault::kLoseReply, false},
+      {op::kUpdate, Fault::kGarbleReply, false},
+      {op::kUpdate, Fault::kLoseReply, true},
+      {op::kUpdate, Fault::kGarbleReply, true},
+      {op::kUpdate, Fault::kLosePacket, true},
+      {op::kSetVelocity, Fault::kLoseReply, false},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::string(pmd::FindOpcode(c.opcode)->name) + " fault " +
+                 std::to_string(static_cast<int>(c.fault)) + (c.moving ? " moving" : ""));
+    EmulatorHost host(std::make_unique<BiclopsEmulator>());
+    auto scripted = std::make_unique<ScriptedLink>(OpenPort(host.port()));
+    ScriptedLink* line = scripted.get();
+    BiclopsHead head(std::move(scripted));
+    if (c.opcode != op::kSetVelocity) {
+      ASSERT_EQ(head.Initialize(), Status::kOk);
+    }
+    if (c.moving) {
+      ASSERT_EQ(head.MoveTo({0.3, 0.05, 0.1}), Status::kOk);
+    }
+    const std::size_t before = Log(host).size();
+    line->Arm(c.opcode, c.fault);
+    ASSERT_EQ(head.MoveTo({-0.1, 0.0, 0.0}), Status::kOk);
+    const std::vector<PmdExecuted> log = Log(host);
+    // Exactly the commands of this move, each once.
+    std::vector<PmdExecuted> expect(log.begin(), log.begin() + static_cast<std::ptrdiff_t>(before));
+    if (c.opcode == op::kSetVelocity) {
+      for (int a = 0; a < 3; ++a) {
+        expect.push_back({0, a, op::kSetVelocity, head.velocity_register(a)});
+        expect.push_back({0, a, op::kSetAcceleration, head.acceleration_register(a)});
+      }
+    }
+    const int moved = c.moving ? 3 : 1;  // from rest at 0 only pan changes
+    for (int a = 0; a < moved; ++a) {
+      expect.push_back({0, a, op::kSetPosition, head.ToCounts({-0.1, 0.0, 0.0})[a]});
+    }
+    for (int a = 0; a < moved; ++a) expect.push_back({0, a, op::kUpdate, 0});
+    EXPECT_EQ(log, expect);
+    const device::HeadState s = WaitStill(head);
+    EXPECT_NEAR(s.q.pan, -0.1, 1e-3);
+    EXPECT_NEAR(s.q.tilt, 0.0, 1e-3);
+    const BiclopsCounters k = head.counters();
+    EXPECT_GE(k.resyncs, 1u);
+    if (c.fault == Fault::kLoseReply || c.fault == Fault::kGarbleReply) {
+      EXPECT_EQ(k.readbacks + k.update_checks, 1u);
+      EXPECT_EQ(k.resends, 0u);  // it had been executed
+    } else {
+      EXPECT_EQ(k.resends, 1u);  // it had not
+    }
+  }
+}
+
+TEST(BiclopsHead, InitializeReadsTheChipAndSetsTheProfile) {
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  BiclopsHead head(OpenPort(host.port()));
+  ASSERT_EQ(head.Initialize(), Status::kOk);
+  EXPECT_EQ(head.version_chip(), 0x2130);
+  EXPECT_EQ(head.version_software(), 0x0015);
+  EXPECT_DOUBLE_EQ(head.cycle_s(), 153e-6);
+  // Pan 150 deg/s = 5000 counts/s: 5000 * 153e-6 * 65536 = 50135.0; 300 deg/s^2 = 10000
+  // counts/s^2: 10000 * 153e-6^2 * 65536 = 15.3.
+  EXPECT_EQ(head.velocity_register(0), 50135);
+  EXPECT_EQ(head.acceleration_register(0), 15u);
+  // Tilt 80 deg/s^2: 4.09 -> 4; verge 100 deg/s: 33423.4 -> 33423.
+  EXPECT_EQ(head.acceleration_register(1), 4u);
+  EXPECT_EQ(head.velocity_register(2), 33423);
+  // Profile mode is trapezoidal at power-up already: not sent. Velocity and acceleration once.
+  std::vector<PmdExecuted> expect;
+  for (int a = 0; a < 3; ++a) {
+    expect.push_back({0, a, op::kSetVelocity, head.velocity_register(a)});
+    expect.push_back({0, a, op::kSetAcceleration, head.acceleration_register(a)});
+  }
+  EXPECT_EQ(Log(host), expect);
+  // Again: nothing differs, nothing is sent.
+  BiclopsHead again(OpenPort(host.port()));
+  ASSERT_EQ(again.Initialize(), Status::kOk);
+  EXPECT_EQ(Log(host), expect);
+}
+
+TEST(BiclopsHead, MoveToReachesTheTargetsAndReadFollows) {
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  BiclopsHead head(OpenPort(host.port()));
+  const device::HeadJoints target{0.5, -0.3, 0.2};
+  const auto t0 = Clock::now();
+  ASSERT_EQ(head.MoveTo(target), Status::kOk);
+  const double command_s = Since(t0);
+  device::HeadState s;
+  ASSERT_EQ(head.Read(&s), Status::kOk);
+  EXPECT_TRUE(s.moving);
+  s = WaitStill(head);
+  EXPECT_FALSE(s.moving);
+  const double count = 2.0 * 3.14159265358979323846 / 12000.0;
+  EXPECT_NEAR(s.q.pan, 0.5, count);
+  EXPECT_NEAR(s.q.tilt, -0.3, count);
+  EXPECT_NEAR(s.q.verge, 0.2, count);
+  EXPECT_GT(s.t_s, 0.0);
+  const std::array<std::int32_t, 3> counts = head.ToCounts(target);
+  EXPECT_EQ(counts[0], 955);  // 0.5 rad * 12000 / 2 pi = 954.93
+  for (int a = 0; a < 3; ++a) EXPECT_DOUBLE_EQ(ChipCounts(host, a), counts[a]);
+  // The log: initialisation, then the three targets, then the three Updates.
+  std::vector<PmdExecuted> log = Log(host);
+  ASSERT_EQ(log.size(), 12u);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(log[6 + a], (PmdExecuted{0, a, op::kSetPosition, counts[a]}));
+    EXPECT_EQ(log[9 + a], (PmdExecuted{0, a, op::kUpdate, 0}));
+  }
+  // The same target again changes nothing: nothing is sent.
+  ASSERT_EQ(head.MoveTo(target), Status::kOk);
+  EXPECT_EQ(Log(host).size(), 12u);
+  // A new pan target alone moves pan alone.
+  ASSERT_EQ(head.MoveTo({-0.5, -0.3, 0.2}), Status::kOk);
+  log = Log(host);
+  ASSERT_EQ(log.size(), 14u);
+  EXPECT_EQ(log[12], (PmdExecuted{0, 0, op::kSetPosition, -955}));
+  EXPECT_EQ(log[13], (PmdExecuted{0, 0, op::kUpdate, 0}));
+  s = WaitStill(head);
+  EXPECT_NEAR(s.q.pan, -0.5, count);
+  std::printf("MoveTo (first, with initialisation) took %.1f ms\n", command_s * 1e3);
+}
+
+TEST(BiclopsHead, MovesAtTheSpeedLimit) {
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  BiclopsHead head(OpenPort(host.port()));
+  ASSERT_EQ(head.Initialize(), Status::kOk);
+  // Pan 90 deg at 150 deg/s, 300 deg/s^2: 0.5 s ramps (37.5 deg) + 0.1 s cruise = 1.1 s.
+  const auto t0 = Clock::now();
+  ASSERT_EQ(head.MoveTo({3.14159265358979323846 / 2, 0.0, 0.0}), Status::kOk);
+  WaitStill(head);
+  const double took = Since(t0);
+  EXPECT_GT(took, 1.0);
+  EXPECT_LT(took, 1.5);
+}
+
+TEST(BiclopsHead, RejectsTargetsOutsideTheRangeWithoutSending) {
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  BiclopsHead head(OpenPort(host.port()));
+  ASSERT_EQ(head.Initialize(), Status::kOk);
+  const std::size_t before = Log(host).size();
+  EXPECT_EQ(head.MoveTo({0.0, 1.2, 0.0}), Status::kRejected);   // tilt > 60 deg
+  EXPECT_EQ(head.MoveTo({0.0, 0.0, -0.2}), Status::kRejected);  // verge < -5 deg
+  EXPECT_EQ(head.MoveTo({NAN, 0.0, 0.0}), Status::kRejected);
+  EXPECT_EQ(Log(host).size(), before);
+  // The ends of the ranges are inside.
+  EXPECT_EQ(head.MoveTo({-3.14159265358979323846, 1.0471975511965976, -0.08726646259971647}),
+            Status::kOk);
+  const device::HeadState s = WaitStill(head);
+  EXPECT_NEAR(s.q.verge, -0.0872665, 3e-4);
+}
+
+TEST(BiclopsHead, BadOptionsNameTheField) {
+  BiclopsOptions o = DefaultBiclopsOptions();
+  o.axes[1].max_speed_rad_s = 0.0;
+  try {
+    BiclopsHead head(std::make_unique<FaultyLink>(nullptr, FaultPlan{}), o);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "biclops.axes.tilt.max_speed_rad_s");
+  }
+}
+
+TEST(BiclopsHead, ResetIsSentOnceAndTheHeadRecovers) {
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  BiclopsHead head(OpenPort(host.port()));
+  ASSERT_EQ(head.MoveTo({0.1, 0.1, 0.1}), Status::kOk);
+  WaitStill(head);
+  ASSERT_EQ(head.ResetChip(), Status::kOk);
+  EXPECT_EQ(host.With([](DeviceEmulator& d) {
+    return dynamic_cast<BiclopsEmulator&>(d).chip().resets();
+  }),
+            1);
+  std::vector<PmdExecuted> log = Log(host);
+  ASSERT_EQ(log.back(), (PmdExecuted{0, 0, op::kReset, 0}));
+  // The counters restart at 0 where the head stands (0.1 rad): it reads 0 now.
+  device::HeadState s;
+  ASSERT_EQ(head.Read(&s), Status::kOk);
+  EXPECT_NEAR(s.q.pan, 0.0, 1e-3);
+  // The next move initialises the profile again and moves relative to the new zero.
+  ASSERT_EQ(head.MoveTo({0.05, 0.0, 0.0}), Status::kOk);
+  s = WaitStill(head);
+  EXPECT_NEAR(s.q.pan, 0.05, 1e-3);
+  EXPECT_NEAR(ChipCounts(host, 0),
+              std::round(0.1 * 12000 / (2 * 3.14159265358979323846)) +
+                  std::round(0.05 * 12000 / (2 * 3.14159265358979323846)),
+              1.0);
+}
+
+TEST(BiclopsHead, CutCableIsReportedWithinHalfASecondAndRecovers) {
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  auto faulty = std::make_unique<FaultyLink>(OpenPort(host.port()), FaultPlan{});
+  FaultyLink* cable = faulty.get();
+  BiclopsHead head(std::move(faulty));
+  ASSERT_EQ(head.Initialize(), Status::kOk);
+  cable->Cut(true);
+  device::HeadState s;
+  auto t0 = Clock::now();
+  EXPECT_EQ(head.Read(&s), Status::kTimeout);
+  const double read_s = Since(t0);
+  t0 = Clock::now();
+  EXPECT_EQ(head.MoveTo({0.2, 0.0, 0.0}), Status::kTimeout);
+  const double move_s = Since(t0);
+  std::printf("cut cable reported after %.0f ms (Read), %.0f ms (MoveTo)\n", read_s * 1e3,
+              move_s * 1e3);
+  EXPECT_LT(read_s, 0.5);
+  EXPECT_LT(move_s, 0.5);
+  EXPECT_TRUE(Log(host).size() == 6u);  // nothing reached the chip
+  cable->Cut(false);
+  ASSERT_EQ(head.MoveTo({0.2, 0.0, 0.0}), Status::kOk);
+  s = WaitStill(head);
+  EXPECT_NEAR(s.q.pan, 0.2, 1e-3);
+  EXPECT_EQ(Log(host).size(), 8u);  // one SetPosition, one Update
+}
+
+TEST(BiclopsHead, VanishedPortIsReportedAndTheDriverReconnects) {
+  const std::string link =
+      ::testing::TempDir() + "hgrasp_biclops_link_" + std::to_string(::getpid());
+  EmulatorHost host(std::make_unique<BiclopsEmulator>(), link);
+  BiclopsHead head(OpenPort(link));
+  ASSERT_EQ(head.MoveTo({0.3, 0.0, 0.0}), Status::kOk);
+  host.Vanish();
+  device::HeadState s;
+  auto t0 = Clock::now();
+  const Status gone = head.Read(&s);
+  const double read_s = Since(t0);
+  EXPECT_TRUE(gone == Status::kDisconnected || gone == Status::kTimeout) << ToString(gone);
+  t0 = Clock::now();
+  const Status gone2 = head.MoveTo({-0.3, 0.0, 0.0});
+  const double move_s = Since(t0);
+  EXPECT_EQ(gone2, Status::kDisconnected) << ToString(gone2);
+  std::printf("vanished port reported after %.0f ms (Read, %s), %.0f ms (MoveTo, %s)\n",
+              read_s * 1e3, std::string(ToString(gone)).c_str(), move_s * 1e3,
+              std::string(ToString(gone2)).c_str());
+  EXPECT_LT(read_s, 0.5);
+  EXPECT_LT(move_s, 0.5);
+  host.Reappear();
+  Status back = Status::kDisconnected;
+  t0 = Clock::now();
+  while (back != Status::kOk && Since(t0) < 3.0) back = head.MoveTo({-0.3, 0.0, 0.0});
+  ASSERT_EQ(back, Status::kOk);
+  s = WaitStill(head);
+  EXPECT_NEAR(s.q.pan, -0.3, 1e-3);
+  // The chip kept its registers: after reading them again the driver sent only the new move.
+  const std::vector<PmdExecuted> log = Log(host);
+  ASSERT_EQ(log.size(), 10u);
+  EXPECT_EQ(log[8].opcode, op::kSetPosition);
+  EXPECT_EQ(log[9].opcode, op::kUpdate);
+  EXPECT_GE(head.counters().disconnects, 1u);
+}
+
+}  // namespace
+}  // namespace hgrasp::drivers

@@ -1,0 +1,82 @@
+#pragma once
+// Test rig: the laser board emulator served on a real pty (EmulatorHost) and the driver on a
+// SerialPort to it, optionally through a FaultyLink or a link that eats the board's replies.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "emulators/emulator.h"
+#include "emulators/laser_board_emulator.h"
+#include "laser_board/board_devices.h"
+#include "laser_board/laser_board.h"
+#include "serial/faulty_link.h"
+#include "serial/serial_port.h"
+
+namespace hgrasp::drivers::testing {
+
+/// Passes everything through, except that while `eat` is set every byte the board sends is
+/// thrown away: the board executes commands whose replies the driver never sees.
+class ReplyEater final : public ByteLink {
+ public:
+  explicit ReplyEater(std::unique_ptr<ByteLink> inner) : inner_(std::move(inner)) {}
+  device::Status Write(std::span<const std::uint8_t> bytes) override {
+    return inner_->Write(bytes);
+  }
+  device::Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+    const device::Status s = inner_->Read(buf, timeout_s, n);
+    if (s == device::Status::kOk && eat) {
+      *n = 0;
+      return device::Status::kTimeout;
+    }
+    return s;
+  }
+  void Discard() override { inner_->Discard(); }
+  std::atomic<bool> eat{false};
+
+ private:
+  std::unique_ptr<ByteLink> inner_;
+};
+
+/// The emulator on a pty under a stable link path, and a SerialPort at 115200 8N1 to it.
+class BoardRig {
+ public:
+  explicit BoardRig(const std::string& name,
+                    const LaserBoardEmulatorConfig& config = LaserBoardEmulatorConfig{})
+      : host_(std::make_unique<LaserBoardEmulator>(config),
+              ::testing::TempDir() + "hgrasp_laser_board_" + name) {}
+
+  /// A serial port to the emulator (nullptr and a test failure when it cannot be opened).
+  std::unique_ptr<SerialPort> OpenPort() {
+    std::string error;
+    SerialConfig config;
+    config.port = host_.port();
+    config.baud = laser_board::kBaud;
+    auto port = SerialPort::Open(config, &error);
+    EXPECT_TRUE(port) << error;
+    return port;
+  }
+
+  EmulatorHost& host() { return host_; }
+
+  /// Runs f(emulator) under the host's lock.
+  template <class F>
+  auto With(F&& f) {
+    return host_.With([&](DeviceEmulator& d) { return f(dynamic_cast<LaserBoardEmulator&>(d)); });
+  }
+  std::vector<laser_board::Command> Executed() {
+    return With([](LaserBoardEmulator& e) { return e.ExecutedCommands(); });
+  }
+
+ private:
+  EmulatorHost host_;
+};
+
+inline double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace hgrasp::drivers::testing

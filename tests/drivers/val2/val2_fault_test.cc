@@ -1,0 +1,444 @@
+// Val2Arm under faults, against the emulated VAL II controller on a real pty:
+//  - 1000 commands through a FaultyLink (1 % of bytes corrupted each way, 0.5 dropouts/s of
+//    200 ms): all complete, and the controller's log of executed commands is exactly the
+//    commanded sequence (none lost, duplicated or altered);
+//  - the answer to a CR lost, or the CR itself lost: the retry completes the command once;
+//  - a cut link reported within 0.5 s, and recovery;
+//  - a link lost for longer than link_lost_s: the arm is stopped on reconnection and motion is
+//    refused until a Read;
+//  - the port vanishing and coming back.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <thread>
+
+#include "emulators/val2_emulator.h"
+#include "serial/faulty_link.h"
+#include "serial/serial_port.h"
+#include "tests/drivers/val2/val2_test_util.h"
+#include "val2/val2_arm.h"
+
+namespace hgrasp::drivers {
+namespace {
+
+using device::Joint6;
+using device::Status;
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::vector<std::string> Executed(EmulatorHost& host) {
+  return host.With([](DeviceEmulator& d) {
+    std::vector<std::string> lines;
+    for (const Val2Executed& x : dynamic_cast<Val2Emulator&>(d).executed()) lines.push_back(x.line);
+    return lines;
+  });
+}
+
+std::unique_ptr<SerialPort> OpenPort(const std::string& path) {
+  std::string error;
+  auto port = SerialPort::Open({path, 9600}, &error);
+  EXPECT_TRUE(port) << error;
+  return port;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
+  EmulatorHost host(MakeVal2Emulator());
+  FaultPlan plan;
+  plan.corrupt_probability = 0.01;
+  plan.dropouts_per_s = 0.5;
+  plan.dropout_s = 0.2;
+  plan.seed = 2002;
+  // VAL2_FAULT_SEED / VAL2_FAULT_GARBAGE: other seeds, and inserted garbage, for soak runs.
+  if (const char* e = std::getenv("VAL2_FAULT_SEED")) plan.seed = std::strtoull(e, nullptr, 10);
+  if (const char* e = std::getenv("VAL2_FAULT_GARBAGE")) plan.garbage_probability = std::atof(e);
+  auto faulty_owned = std::make_unique<FaultyLink>(OpenPort(host.port()), plan);
+  FaultyLink* faulty = faulty_owned.get();
+  Val2Options options;
+  std::vector<std::string> trace;  // the last exchanges, printed when the log differs
+  if (std::getenv("VAL2_TRACE")) {
+    options.trace = [&trace](const std::string& t) { trace.push_back(t); };
+  }
+  Val2Arm arm(std::move(faulty_owned), options);
+
+  // A deterministic mix with distinct values: joint moves about the start pose, small relative
+  // moves, speeds, stops, and reads.
+  const std::array<double, 6> base = {0.0, -60.0, 30.0, 0.0, -45.0, 0.0};
+  std::vector<std::string> expected;
+  std::vector<int> expected_command;  // the index of each expected entry's command
+  int failures = 0, reads = 0, max_attempts = 0;
+  std::map<Status, int> failure_kinds;
+  const Clock::time_point t0 = Clock::now();
+  for (int i = 0; i < 1000; ++i) {
+    std::function<Status()> call;
+    std::string line;
+    switch (i % 10) {
+      case 0:
+      case 3:
+      case 6: {
+        std::array<double, 6> d = base;
+        d[0] += ((i * 7) % 21 - 10) * 0.5 + i * 0.001;
+        d[1] += ((i * 3) % 13 - 6) * 0.5;
+        d[2] += ((i * 5) % 11 - 5) * 0.5;
+        d[3] += ((i * 11) % 17 - 8);
+        d[4] += ((i * 13) % 9 - 4);
+        d[5] += ((i * 17) % 23 - 11);
+        const Joint6 q = Deg(d);
+        line = val2::Encode(val2::MoveJointsCommand(ToDeg(q)));
+        call = [&arm, q] { return arm.MoveJoints(q); };
+        break;
+      }
+      case 1:
+      case 7: {
+        Pose3 delta = Pose3::Identity();
+        // Distinct (i * 0.01 mm), and alternating in sign so that the arm does not drift away.
+        const double distinct = (i % 10 == 1 ? 1e-5 : -1e-5) * i;
+        delta.translate(Eigen::Vector3d(((i * 3) % 7 - 3) * 0.0005 + distinct,
+                                        ((i * 5) % 7 - 3) * 0.0005, ((i * 2) % 5 - 2) * 0.0005));
+        delta.rotate(Eigen::AngleAxisd(DegToRad(((i * 7) % 9 - 4) * 0.25),
+                                       Eigen::Vector3d(1, (i % 3) - 1.0, 0.5).normalized()));
+        line = val2::Encode(val2::MoveRelativeCommand(val2::PoseToTrans(delta)));
+        call = [&arm, delta] { return arm.MoveRelative(delta); };
+        break;
+      }
+      case 2: {
+        const double f = 0.3 + i * 0.0001;
+        line = val2::Encode(val2::SpeedCommand(f * 100.0));
+        call = [&arm, f] { return arm.SetSpeed(f); };
+        break;
+      }
+      case 5:
+        line = "ABORT";
+        call = [&arm] { return arm.Stop(); };
+        break;
+      default:
+        call = [&arm] {
+          device::ArmState s;
+          return arm.Read(&s);
+        };
+    }
+    int attempts = 0;
+    Status s;
+    // A failed command is retried only through the driver's own API.
+    if (options.trace) options.trace("== command " + std::to_string(i) + " " + line);
+    while ((s = call()) != Status::kOk && attempts < 100) {
+      if (options.trace) options.trace("== failed: " + std::string(device::ToString(s)));
+      ++attempts;
+      ++failures;
+      ++failure_kinds[s];
+      if (s == Status::kRejected) {
+        const std::size_t from = trace.size() > 80 ? trace.size() - 80 : 0;
+        for (std::size_t k = from; k < trace.size(); ++k) std::printf("%s\n", trace[k].c_str());
+        for (const auto& [l, m] : host.With(
+                 [](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).refused(); })) {
+          std::printf("refused: %s: %s\n", l.c_str(), m.c_str());
+        }
+      }
+      ASSERT_NE(s, Status::kRejected) << "command " << i << ": " << arm.last_error();
+    }
+    ASSERT_EQ(s, Status::kOk) << "command " << i << " never completed";
+    max_attempts = std::max(max_attempts, attempts + 1);
+    if (line.empty()) {
+      ++reads;
+    } else {
+      expected.push_back(line);
+      expected_command.push_back(i);
+    }
+  }
+  const double elapsed = Since(t0);
+  const FaultCounts fc = faulty->counts();
+  const Val2Counters& c = arm.counters();
+  std::printf(
+      "[ faults   ] %.1f s; bytes %llu, corrupted %llu, dropped %llu in %llu dropouts\n"
+      "[ driver   ] %zu commands + %d reads; failed calls %d (timeout %d, disconnected %d, bad "
+      "reply %d), at most %d calls for one command\n"
+      "[ driver   ] typed %ld, echo mismatches %ld, probes %ld, cancels %ld, rubouts %ld, "
+      "retries resolved %ld, pending cancelled %ld, bad WHERE %ld, safety aborts %ld\n",
+      elapsed, static_cast<unsigned long long>(fc.bytes),
+      static_cast<unsigned long long>(fc.corrupted), static_cast<unsigned long long>(fc.dropped),
+      static_cast<unsigned long long>(fc.dropouts), expected.size(), reads, failures,
+      failure_kinds[Status::kTimeout], failure_kinds[Status::kDisconnected],
+      failure_kinds[Status::kBadReply], max_attempts, c.typed, c.echo_mismatches, c.probes,
+      c.cancels, c.rubouts, c.resolved_retries, c.cancelled_pending, c.bad_where, c.safety_aborts);
+  EXPECT_GT(fc.corrupted, 100u);
+  EXPECT_GT(fc.dropouts, 0u);
+  // The controller executed exactly the commanded sequence.
+  const std::vector<std::string> log = Executed(host);
+  std::size_t first_diff = 0;
+  while (first_diff < log.size() && first_diff < expected.size() &&
+         log[first_diff] == expected[first_diff]) {
+    ++first_diff;
+  }
+  if (first_diff < std::max(log.size(), expected.size())) {
+    for (std::size_t k = first_diff > 2 ? first_diff - 2 : 0; k < first_diff + 3; ++k) {
+      std::printf("  %zu: executed %s\n     commanded %s\n", k,
+                  k < log.size() ? log[k].c_str() : "-",
+                  k < expected.size() ? expected[k].c_str() : "-");
+    }
+  }
+  if (first_diff < expected.size() && !trace.empty()) {
+    // The exchanges of the commands around the first difference.
+    const int from = expected_command[first_diff] - 2, to = expected_command[first_diff] + 2;
+    bool on = false;
+    for (const std::string& t : trace) {
+      if (t.rfind("== command ", 0) == 0) {
+        const int c = std::atoi(t.c_str() + 11);
+        on = c >= from && c <= to;
+      }
+      if (on) std::printf("%s\n", t.c_str());
+    }
+  }
+  EXPECT_EQ(first_diff, expected.size()) << "first difference";
+  EXPECT_EQ(log.size(), expected.size());
+  if (plan.garbage_probability == 0.0) {
+    EXPECT_LT(elapsed, 60.0);
+  }
+}
+
+TEST(Val2Faults, ConfirmedReadsAreRightUnderCorruption) {
+  // A digit corrupted into another digit passes any parse; confirm_reads catches it.
+  EmulatorHost host(MakeVal2Emulator());
+  FaultPlan plan;
+  plan.corrupt_probability = 0.01;
+  plan.seed = 77;
+  Val2Options options;
+  options.confirm_reads = true;
+  Val2Arm arm(std::make_unique<FaultyLink>(OpenPort(host.port()), plan), options);
+  const Joint6 truth =
+      host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).model().q(); });
+  int wrong = 0;
+  for (int n = 0; n < 50; ++n) {
+    device::ArmState s;
+    Status st;
+    while ((st = arm.Read(&s)) != Status::kOk) {
+    }
+    if ((s.q - truth).cwiseAbs().maxCoeff() > DegToRad(0.0005)) ++wrong;
+  }
+  std::printf("[ confirm  ] 50 reads, %d wrong; %ld reports refused or disagreeing\n", wrong,
+              arm.counters().bad_where);
+  EXPECT_EQ(wrong, 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scripted losses around the CR.
+
+// A ByteLink that, once armed, loses everything in both directions for `lose_s` from the next CR
+// the driver writes (with or without that CR).
+class CrLoser final : public ByteLink {
+ public:
+  explicit CrLoser(std::unique_ptr<ByteLink> inner) : inner_(std::move(inner)) {}
+  void Arm(bool lose_the_cr, double lose_s) {
+    armed_ = true;
+    lose_cr_ = lose_the_cr;
+    lose_s_ = lose_s;
+  }
+  Status Write(std::span<const std::uint8_t> bytes) override {
+    if (armed_ && std::find(bytes.begin(), bytes.end(), '\r') != bytes.end()) {
+      armed_ = false;
+      until_ = Clock::now() +
+               std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(lose_s_));
+      if (lose_cr_) return Status::kOk;
+      return inner_->Write(bytes);
+    }
+    if (Clock::now() < until_) return Status::kOk;
+    return inner_->Write(bytes);
+  }
+  Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+    const Clock::time_point end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                     std::chrono::duration<double>(timeout_s));
+    for (;;) {
+      const double left = std::chrono::duration<double>(end - Clock::now()).count();
+      const Status s = inner_->Read(buf, std::max(0.0, left), n);
+      if (s != Status::kOk || Clock::now() >= until_) return s;
+      *n = 0;  // lost
+      if (left <= 0.0) return Status::kTimeout;
+    }
+  }
+  void Discard() override { inner_->Discard(); }
+
+ private:
+  std::unique_ptr<ByteLink> inner_;
+  bool armed_ = false, lose_cr_ = false;
+  double lose_s_ = 0.0;
+  Clock::time_point until_{};
+};
+
+struct LossRig {
+  LossRig() : host(MakeVal2Emulator()) {
+    auto loser_owned = std::make_unique<CrLoser>(OpenPort(host.port()));
+    loser = loser_owned.get();
+    arm = std::make_unique<Val2Arm>(std::move(loser_owned));
+  }
+  EmulatorHost host;
+  CrLoser* loser;
+  std::unique_ptr<Val2Arm> arm;
+};
+
+const Joint6 kA = Deg({5, -55, 25, 1, -44, 2});
+const Joint6 kB = Deg({-5, -65, 35, -1, -46, -2});
+std::string Line(const Joint6& q) { return val2::Encode(val2::MoveJointsCommand(ToDeg(q))); }
+
+TEST(Val2Faults, LostAnswerToTheCrThenRetry) {
+  LossRig rig;
+  rig.loser->Arm(/*lose_the_cr=*/false, 0.7);  // the CR runs the command; its answer is lost
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);  // the retry finds it done
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+  EXPECT_EQ(rig.arm->counters().resolved_retries, 1);
+}
+
+TEST(Val2Faults, LostCrThenRetry) {
+  LossRig rig;
+  rig.loser->Arm(/*lose_the_cr=*/true, 0.7);  // the CR never arrives: the line waits, unrun
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_TRUE(Executed(rig.host).empty());
+  EXPECT_EQ(
+      rig.host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).input_line(); }),
+      Line(kA));
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);  // the retry sends the missing CR
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+}
+
+TEST(Val2Faults, LostAnswerThenReadThenRetry) {
+  LossRig rig;
+  rig.loser->Arm(false, 0.7);
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  device::ArmState s;
+  EXPECT_EQ(rig.arm->Read(&s), Status::kOk);        // finds the command executed
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);  // its retry: not sent again
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);  // a new call: sent
+  EXPECT_EQ(Executed(rig.host), (std::vector<std::string>{Line(kA), Line(kA)}));
+}
+
+TEST(Val2Faults, LostCrThenAnotherCommandCancelsIt) {
+  LossRig rig;
+  rig.loser->Arm(true, 0.7);
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(rig.arm->MoveJoints(kB), Status::kOk);  // not the retry: A must not run now
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kB)});
+  EXPECT_EQ(rig.arm->counters().cancelled_pending, 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cut link, lost link, vanished port.
+
+TEST(Val2Faults, CutLinkReportedWithinHalfASecondAndRecovered) {
+  EmulatorHost host(MakeVal2Emulator());
+  auto faulty_owned = std::make_unique<FaultyLink>(OpenPort(host.port()), FaultPlan{});
+  FaultyLink* faulty = faulty_owned.get();
+  Val2Arm arm(std::move(faulty_owned));
+  device::ArmState s;
+  ASSERT_EQ(arm.Read(&s), Status::kOk);
+  ASSERT_EQ(arm.MoveJoints(kA), Status::kOk);
+
+  faulty->Cut(true);
+  for (auto call : std::vector<std::function<Status()>>{[&] { return arm.MoveJoints(kB); },
+                                                        [&] { return arm.Read(&s); }}) {
+    const Clock::time_point t0 = Clock::now();
+    const Status st = call();
+    const double dt = Since(t0);
+    std::printf("[ cut      ] reported %s after %.3f s\n",
+                std::string(device::ToString(st)).c_str(), dt);
+    EXPECT_TRUE(st == Status::kTimeout || st == Status::kDisconnected);
+    EXPECT_LT(dt, 0.5);
+  }
+  faulty->Cut(false);
+  // A short cut (under link_lost_s): the driver carries on.
+  EXPECT_FALSE(arm.link_lost());
+  EXPECT_EQ(arm.MoveJoints(kB), Status::kOk);
+  EXPECT_EQ(Executed(host), (std::vector<std::string>{Line(kA), Line(kB)}));
+}
+
+TEST(Val2Faults, LostLinkStopsTheArmOnReconnection) {
+  EmulatorHost host(MakeVal2Emulator());
+  auto faulty_owned = std::make_unique<FaultyLink>(OpenPort(host.port()), FaultPlan{});
+  FaultyLink* faulty = faulty_owned.get();
+  Val2Arm arm(std::move(faulty_owned));
+  ASSERT_EQ(arm.SetSpeed(0.05), Status::kOk);
+  const Joint6 far = Deg({60, -60, 30, 0, -45, 0});
+  ASSERT_EQ(arm.MoveJoints(far), Status::kOk);
+
+  faulty->Cut(true);
+  device::ArmState s;
+  const Clock::time_point t0 = Clock::now();
+  while (Since(t0) < 1.6) {
+    const Clock::time_point t1 = Clock::now();
+    const Status st = arm.Read(&s);
+    EXPECT_NE(st, Status::kOk);
+    EXPECT_LT(Since(t1), 0.5);
+  }
+  EXPECT_TRUE(arm.link_lost());
+  // VAL goes on with its motion while the host is away.
+  EXPECT_TRUE(
+      host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).model().moving(); }));
+  faulty->Cut(false);
+  // On reconnection: the arm is stopped, and motion refused until a Read.
+  EXPECT_EQ(arm.MoveJoints(kB), Status::kDisconnected);
+  EXPECT_FALSE(arm.link_lost());
+  EXPECT_EQ(arm.counters().safety_aborts, 1);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_FALSE(
+      host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).model().moving(); }));
+  const double j1 =
+      host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).model().q()[0]; });
+  EXPECT_LT(j1, far[0] - 0.1);  // stopped short of the target
+  EXPECT_EQ(arm.SetSpeed(0.5), Status::kDisconnected);
+  ASSERT_EQ(arm.Read(&s), Status::kOk);
+  EXPECT_EQ(arm.MoveJoints(kB), Status::kOk);
+  EXPECT_EQ(Executed(host),
+            (std::vector<std::string>{"SPEED (5.00)", Line(far), "ABORT", Line(kB)}));
+}
+
+TEST(Val2Faults, PortVanishesAndComesBack) {
+  const std::string link = ::testing::TempDir() + "hgrasp_val2_fault_link";
+  EmulatorHost host(MakeVal2Emulator(), link);
+  Val2Arm arm(OpenPort(link));
+  device::ArmState s;
+  ASSERT_EQ(arm.Read(&s), Status::kOk);
+  ASSERT_EQ(arm.MoveJoints(kA), Status::kOk);
+
+  host.Vanish();
+  const Clock::time_point t0 = Clock::now();
+  const Status st = arm.MoveJoints(kB);
+  std::printf("[ vanish   ] reported %s after %.3f s\n", std::string(device::ToString(st)).c_str(),
+              Since(t0));
+  EXPECT_EQ(st, Status::kDisconnected);
+  EXPECT_LT(Since(t0), 0.5);
+  EXPECT_TRUE(arm.link_lost());
+  const Clock::time_point t1 = Clock::now();
+  EXPECT_EQ(arm.Read(&s), Status::kDisconnected);
+  EXPECT_LT(Since(t1), 0.5);
+
+  host.Reappear();
+  // The driver reopens the same path on its own.
+  Status r = Status::kDisconnected;
+  const Clock::time_point t2 = Clock::now();
+  while (r != Status::kOk && Since(t2) < 2.0) {
+    r = arm.Read(&s);
+    if (r != Status::kOk) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(r, Status::kOk);
+  std::printf("[ vanish   ] back after %.3f s\n", Since(t2));
+  EXPECT_EQ(arm.MoveJoints(kB), Status::kOk);
+  EXPECT_EQ(Executed(host), (std::vector<std::string>{Line(kA), "ABORT", Line(kB)}));
+}
+
+}  // namespace
+}  // namespace hgrasp::drivers
