@@ -18,6 +18,7 @@
 #include "scan/stereo_geometry.h"
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
+#include "tests/servo/servo_sim_util.h"
 
 namespace hgrasp::servo {
 namespace {
@@ -97,18 +98,6 @@ TEST(MatchAndTriangulate, SyntheticStereoPairRoundTrip) {
   }
 }
 
-// Lets simulated time run (a frame is 40 ms) until arm `side` is still; returns the last frame.
-device::StereoFrame Settle(device::RobotDevices& dev, device::Side side, double max_s) {
-  device::StereoFrame frame;
-  for (double t = 0; t < max_s; t += 0.04) {
-    dev.cameras->Grab(&frame);
-    device::ArmState a;
-    dev.ArmOf(side).Read(&a);
-    if (!a.moving && t > 0.4) break;
-  }
-  return frame;
-}
-
 class SimLeds : public ::testing::Test {
  protected:
   SimLeds()
@@ -123,27 +112,11 @@ class SimLeds : public ::testing::Test {
   // kinematics, the solution within limits nearest the arm's joints now.
   device::StereoFrame MoveGripper(device::Side side, const Eigen::Vector3d& p_W,
                                   const Eigen::Vector3d& approach_W, double tilt) {
-    const auto tree = robot::KinematicTree::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
-    const auto arm =
-        robot::ArmKinematics::FromTree(tree, side == device::Side::kLeft ? "left" : "right");
-    device::ArmState a;
-    dev_.ArmOf(side).Read(&a);
-    const Eigen::Vector3d z = approach_W.normalized();
-    const Eigen::Vector3d to_camera = robot_.rig().View(sim::kLeft).X_WC.translation() - p_W;
-    const Eigen::Vector3d y0 = (to_camera - to_camera.dot(z) * z).normalized();
-    const Eigen::Vector3d y = Eigen::AngleAxisd(tilt, z) * y0;
-    Pose3 X_WE = Pose3::Identity();
-    X_WE.linear().col(0) = y.cross(z);
-    X_WE.linear().col(1) = y;
-    X_WE.linear().col(2) = z;
-    X_WE.translation() = p_W;
-    std::optional<device::Joint6> q;
-    for (const robot::ArmIkSolution& s : arm.Inverse(X_WE)) {
-      if (arm.WithinLimits(s.q) && (!q || (s.q - a.q).norm() < (*q - a.q).norm())) q = s.q;
-    }
+    const std::optional<device::Joint6> q =
+        testing::JointsFacingCamera(robot_, dev_, side, p_W, approach_W, tilt);
     EXPECT_TRUE(q.has_value()) << "no joints reach " << p_W.transpose();
     if (q) dev_.ArmOf(side).MoveJoints(*q);
-    return Settle(dev_, side, 10.0);
+    return testing::Settle(dev_, side, 10.0);
   }
 
   // The rectification at the frame's verge angle, as the pipeline computes it.

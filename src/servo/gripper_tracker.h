@@ -1,0 +1,146 @@
+#pragma once
+/// @file The gripper tracker (paper section 6): finds one gripper by its LEDs, identifies each LED
+/// by flashing them one at a time, and then follows the gripper's pose X_CLE (E in the left
+/// camera's optical frame) frame by frame through the pose Kalman filter.
+///
+/// Initialise (also the recovery when tracking is lost), as in the paper: all LEDs on, the filter
+/// starts from the mean of the triangulated LEDs (InitialisePosition); then, per cycle, one frame
+/// with all LEDs off (the background: anything bright and red that is not this gripper's LEDs)
+/// and one frame per LED with only that LED on; the one new triangulated point that is not in
+/// the background is that LED, whatever else is in view. The identified LEDs give a pose
+/// (FitGripperPose) that the filter fuses; cycles repeat until the filter has converged or
+/// max_init_cycles are spent. All LEDs are on when Initialise returns.
+///
+/// Track, per frame with all LEDs on: LEDs in both images -> triangulated points -> each point
+/// associated to the LED whose predicted position (filter pose after Predict) is nearest, within
+/// a gate -> FitGripperPose -> filter Update. Too few associated LEDs for max_missed_frames
+/// frames in a row makes lost() true; the caller then runs Initialise again.
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "device/leds.h"
+#include "device/stereo_camera.h"
+#include "robot/calibration.h"
+#include "robot/head_kinematics.h"
+#include "scan/stereo_geometry.h"
+#include "servo/led_detector.h"
+#include "servo/led_layout.h"
+#include "servo/pose_filter.h"
+
+namespace hgrasp::servo {
+
+struct GripperTrackerOptions {
+  LedDetectorConfig detector;
+  LedMatchConfig match;
+  PoseFilterOptions filter;
+  /// Noise of a pose measured by FitGripperPose from triangulated LEDs.
+  PoseMeasurementNoise measurement;
+  /// Position std dev (m) given to the filter with the LEDs' mean at start-up: the mean is not
+  /// E's origin (it is off by the layout's centroid in E, a few cm).
+  double initial_position_std = 0.05;
+  /// At most this many flash cycles per Initialise.
+  int max_init_cycles = 5;
+  /// A point that moved less than this (m) between the all-off frame and a flash frame is
+  /// background, not the flashed LED.
+  double background_radius = 0.005;
+  /// A triangulated point is associated to an LED only within this distance (m) of the LED's
+  /// predicted position (the LEDs are >= 54 mm apart in the sim layout).
+  double association_gate = 0.02;
+  /// With more than 3 LEDs, the LED with the largest fit residual is dropped (and the pose
+  /// refitted) while that residual exceeds this (m): a partly hidden LED triangulates off centre.
+  double max_led_residual = 0.0015;
+  /// A fitted pose whose RMS residual exceeds this (m) is rejected (a wrong association).
+  double max_fit_rms = 0.004;
+  /// A pose measurement whose normalised innovation squared (6 dof) exceeds this is rejected.
+  double max_nis = 100.0;
+  /// lost() after this many frames in a row without a pose measurement (10 frames = 0.4 s).
+  int max_missed_frames = 10;
+};
+
+enum class TrackerStatus {
+  kOk = 0,
+  kDeviceError,     ///< Leds::Set or StereoCamera::Grab failed (see device_status())
+  kNotFound,        ///< Initialise: no LED seen, or the filter did not converge
+  kNotInitialised,  ///< Track before a successful Initialise
+  kNoMeasurement,   ///< Track: too few LEDs associated, or the fit was rejected
+  kLost,            ///< Track: lost (too many frames without a measurement); run Initialise
+};
+
+std::string_view ToString(TrackerStatus s);
+
+class GripperTracker {
+ public:
+  /// @param side     the gripper tracked (which LEDs Initialise switches)
+  /// @param layout   its LED positions in E (LoadLedLayouts(...).Of(side))
+  /// @param cameras  the stereo intrinsics
+  /// @param head     head kinematics: the cameras' relative pose at each frame's verge angle
+  /// @throws InputError for a layout with fewer than 3 or more than kMaxLeds LEDs.
+  GripperTracker(device::Side side, LedLayout layout, robot::StereoIntrinsics cameras,
+                 robot::HeadKinematics head, const GripperTrackerOptions& options = {});
+
+  /// Finds and identifies the LEDs and runs the filter to convergence (see the file comment).
+  /// Restarts the filter from scratch; clears lost(). Grabs 2 + Count frames per cycle.
+  TrackerStatus Initialise(device::Leds& leds, device::StereoCamera& camera);
+
+  /// One frame with all LEDs on (see the file comment). Frames must come in time order.
+  TrackerStatus Track(const device::StereoFrame& frame);
+
+  bool lost() const { return lost_; }
+  /// True after a successful Initialise, until lost.
+  bool tracking() const { return tracking_; }
+  const PoseFilter& filter() const { return filter_; }
+  /// X_CLE: the filter's gripper pose in the left camera's optical frame.
+  Pose3 pose() const { return filter_.pose(); }
+  device::Side side() const { return side_; }
+  const LedLayout& layout() const { return layout_; }
+
+  /// LED i's position in CL at the last measurement (nullopt when it was not seen/identified).
+  const std::vector<std::optional<Eigen::Vector3d>>& last_leds() const { return last_leds_; }
+  double last_fit_rms() const { return last_fit_rms_; }  ///< m
+  double last_nis() const { return last_nis_; }
+  device::Status device_status() const { return device_status_; }
+
+  std::int64_t frames() const { return frames_; }              ///< frames grabbed or tracked
+  std::int64_t flashes() const { return flashes_; }            ///< single-LED flash frames
+  std::int64_t recoveries() const { return recoveries_; }      ///< Initialise successes after lost
+  std::int64_t measurements() const { return measurements_; }  ///< poses fused
+
+ private:
+  const scan::Rectification& RectificationAt(double verge);
+  std::vector<LedPoint> Points(const device::StereoFrame& frame);
+  /// Predicts the filter to time t_s (never backwards).
+  void PredictTo(double t_s);
+  /// Fits the identified LEDs (ids[k] = LED of points[k], or -1) and fuses the pose: `first`
+  /// starts the filter from it, else it is a (gated) update. True when fused.
+  bool Fuse(const std::vector<LedPoint>& points, const std::vector<int>& ids, bool first);
+  /// Predicts to the frame, associates its points by the predicted pose and fuses the fit.
+  bool MeasureTracked(const device::StereoFrame& frame);
+  TrackerStatus Grab(device::StereoCamera& camera, device::StereoFrame* frame);
+  TrackerStatus SetLeds(device::Leds& leds, std::uint32_t mask);
+
+  device::Side side_;
+  LedLayout layout_;
+  robot::StereoIntrinsics cameras_;
+  robot::HeadKinematics head_;
+  GripperTrackerOptions options_;
+  PoseFilter filter_;
+
+  std::optional<double> rect_verge_;
+  scan::Rectification rect_;
+
+  bool tracking_ = false;
+  bool lost_ = false;
+  bool has_orientation_ = false;
+  double last_t_s_ = 0.0;
+  int missed_ = 0;
+  std::vector<std::optional<Eigen::Vector3d>> last_leds_;
+  double last_fit_rms_ = 0.0;
+  double last_nis_ = 0.0;
+  device::Status device_status_ = device::Status::kOk;
+  std::int64_t frames_ = 0, flashes_ = 0, recoveries_ = 0, measurements_ = 0;
+};
+
+}  // namespace hgrasp::servo
