@@ -40,9 +40,6 @@ bool BaudCode(int baud, speed_t* code) {
   return false;
 }
 
-// Errors that mean the port itself is gone (hang-up, unplugged), not a passing condition.
-bool PortGone(int err) { return err == EIO || err == ENXIO || err == ENODEV || err == EBADF; }
-
 }  // namespace
 
 bool IsStandardBaud(int baud) {
@@ -184,14 +181,9 @@ device::Status SerialPort::Read(std::span<std::uint8_t> buf, double timeout_s, s
         return Status::kOk;
       }
       if (got < 0 && (errno == EAGAIN || errno == EINTR)) continue;
-      if (got == 0 || PortGone(errno)) {
-        Hangup();
-        return Status::kDisconnected;
-      }
-      Hangup();
-      return Status::kDisconnected;
     }
-    // POLLHUP / POLLERR without data: the other end is gone.
+    // End of file, a read error (EIO on a hung-up pty or an unplugged adapter), or POLLHUP /
+    // POLLERR without data: the port is gone.
     Hangup();
     return Status::kDisconnected;
   }
