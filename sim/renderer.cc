@@ -51,6 +51,29 @@ Renderer::~Renderer() {
 
 std::string Renderer::DeviceDescription() const { return egl_->description(); }
 
+cv::Mat Renderer::RenderColor(const mjData* data, int camera_id) {
+  mjvCamera camera;
+  mjv_defaultCamera(&camera);
+  camera.type = mjCAMERA_FIXED;
+  camera.fixedcamid = camera_id;
+  const mjrRect viewport = {0, 0, width_, height_};
+  mjv_updateScene(model_, const_cast<mjData*>(data), &option_, nullptr, &camera, mjCAT_ALL,
+                  &scene_);
+  egl_->MakeCurrent();
+  mjr_setBuffer(mjFB_OFFSCREEN, &context_);
+  scene_.flags[mjRND_SEGMENT] = 0;
+  scene_.flags[mjRND_IDCOLOR] = 0;
+  mjr_render(viewport, &scene_, &context_);
+  mjr_readPixels(rgb_.data(), nullptr, viewport, &context_);
+  cv::Mat color(height_, width_, CV_8UC3);
+  for (int r = 0; r < height_; ++r) {
+    const unsigned char* src = &rgb_[3 * (height_ - 1 - r) * width_];
+    auto* row = color.ptr<cv::Vec3b>(r);
+    for (int c = 0; c < width_; ++c) row[c] = cv::Vec3b(src[3 * c + 2], src[3 * c + 1], src[3 * c]);
+  }
+  return color;
+}
+
 CameraImages Renderer::Render(const mjData* data, int camera_id) {
   mjvCamera camera;
   mjv_defaultCamera(&camera);

@@ -72,7 +72,7 @@ std::vector<double> StereoRig::RedReflectance() const {
   return red;
 }
 
-const CameraView& StereoRig::View(int camera) {
+void StereoRig::CheckCache() {
   const std::vector<double> key = SceneKey();
   // Resting objects still creep by fractions of a micrometre as their contacts converge; a
   // render stays valid until something moved more than 1 um or 1 urad since it was made.
@@ -81,8 +81,24 @@ const CameraView& StereoRig::View(int camera) {
   for (size_t i = 0; same && i < key.size(); ++i) same = std::abs(key[i] - key_[i]) <= kStill;
   if (!same) {
     valid_ = {false, false};
+    color_valid_ = {false, false};
     key_ = key;
   }
+}
+
+const cv::Mat& StereoRig::Color(int camera) {
+  CheckCache();
+  if (valid_[camera]) return views_[camera].images.color;
+  if (!color_valid_[camera]) {
+    colors_[camera] = renderer_->RenderColor(world_->data(), camera_ids_[camera]);
+    color_valid_[camera] = true;
+    ++color_renders_;
+  }
+  return colors_[camera];
+}
+
+const CameraView& StereoRig::View(int camera) {
+  CheckCache();
   if (!valid_[camera]) {
     const int id = camera_ids_[camera];
     views_[camera] =
@@ -180,10 +196,15 @@ StereoImages StereoRig::Expose(std::uint64_t frame_key) {
   StereoImages out;
   const std::vector<LightSheet> sheets = Sheets();
   for (int cam = 0; cam < 2; ++cam) {
-    const CameraView& view = View(cam);
     cv::Mat radiance;
-    view.images.color.convertTo(radiance, CV_32FC3);
-    out.crossings[cam] = AddStripes(view, sheets, optics_, &radiance);
+    if (sheets.empty()) {
+      // No light but the ambient: the colour image alone (the servo's frames, arm moving).
+      Color(cam).convertTo(radiance, CV_32FC3);
+    } else {
+      const CameraView& view = View(cam);
+      view.images.color.convertTo(radiance, CV_32FC3);
+      out.crossings[cam] = AddStripes(view, sheets, optics_, &radiance);
+    }
     if (world_->scenario().camera_noise > 0) {
       // One stream per scenario seed, frame and camera: the same run gives the same images.
       cv::RNG rng(world_->scenario().seed * 0x9E3779B97F4A7C15ull ^ (frame_key * 2 + cam + 1));

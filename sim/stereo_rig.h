@@ -34,6 +34,10 @@ class StereoRig {
   /// switched); with the cache off, rendered every call.
   const CameraView& View(int camera);
 
+  /// The camera's ambient colour image at the current state (cached as View is, but rendered
+  /// colour only when no full view is at hand): Expose uses it when no light sheet is lit.
+  const cv::Mat& Color(int camera);
+
   /// The light sheets at the current state and time: our laser (when on), the scenario's
   /// interference stripes, and their mirror images in specular objects.
   std::vector<LightSheet> Sheets() const;
@@ -55,12 +59,16 @@ class StereoRig {
   void set_cache_enabled(bool on) { cache_enabled_ = on; }
   /// Full scene renders so far (each one renders both colour/depth and labels).
   int full_renders() const { return full_renders_; }
+  /// Colour-only renders so far.
+  int color_renders() const { return color_renders_; }
   const StripeOptics& optics() const { return optics_; }
   Renderer& renderer() { return *renderer_; }
   int camera_id(int camera) const { return camera_ids_[camera]; }
 
  private:
   std::vector<double> SceneKey() const;
+  /// Drops the cached renders when the scene moved since they were made.
+  void CheckCache();
   std::vector<double> RedReflectance() const;
 
   World* world_;
@@ -70,10 +78,13 @@ class StereoRig {
   int laser_site_, laser_joint_, laser_joint_qpos_;
   std::array<CameraView, 2> views_;
   std::array<bool, 2> valid_ = {false, false};
+  std::array<cv::Mat, 2> colors_;
+  std::array<bool, 2> color_valid_ = {false, false};
   std::vector<double> key_;
   std::array<std::vector<StripeCrossing>, 2> last_crossings_;
   bool cache_enabled_ = true;
   int full_renders_ = 0;
+  int color_renders_ = 0;
 };
 
 }  // namespace hgrasp::sim

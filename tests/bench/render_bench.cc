@@ -28,6 +28,15 @@ void BM_StereoFrameFullRender(benchmark::State& state) {
 }
 BENCHMARK(BM_StereoFrameFullRender)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The servo's frames: laser off, the arm moving (cache off), colour only.
+void BM_StereoFrameColourOnly(benchmark::State& state) {
+  auto robot = DefaultRobot();
+  robot->rig().set_cache_enabled(false);
+  std::uint64_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(robot->rig().Expose(k++));
+}
+BENCHMARK(BM_StereoFrameColourOnly)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_StereoFrameComposited(benchmark::State& state) {
   auto robot = DefaultRobot();
   robot->world().set_laser_on(true);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <opencv2/core.hpp>
 
 #include "sim/stereo_rig.h"
 #include "tests/sim/sim_test_util.h"
@@ -152,6 +153,26 @@ objects:
     EXPECT_GT(fraction, 0.995);
     EXPECT_LT(worst_depth, 0.0005);
   }
+}
+
+// The colour-only path (the servo's frames) gives the very pixels of the full render.
+TEST(RenderColorTest, ColourOnlyRenderEqualsFullRendersColour) {
+  World world(ScenarioFromYaml(R"(name: colour
+objects:
+  - {name: a, shape: box, size: [0.06, 0.09, 0.12], position: [0.30, 0.06], yaw_deg: 25, color: [0.95, 0.85, 0.1]}
+)"));
+  StereoRig rig(&world);
+  for (int cam : {kLeft, kRight}) {
+    const cv::Mat color = rig.renderer().RenderColor(world.data(), rig.camera_id(cam));
+    const cv::Mat full = rig.renderer().Render(world.data(), rig.camera_id(cam)).color;
+    ASSERT_EQ(color.size(), full.size());
+    EXPECT_EQ(cv::norm(color, full, cv::NORM_INF), 0.0) << "camera " << cam;
+    EXPECT_GT(cv::norm(color, cv::NORM_L1), 0.0);
+  }
+  // Exposures with the laser off come from colour-only renders.
+  rig.Expose(0);
+  EXPECT_EQ(rig.full_renders(), 0);
+  EXPECT_EQ(rig.color_renders(), 2);
 }
 
 }  // namespace
