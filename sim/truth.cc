@@ -205,4 +205,21 @@ LaserPlaneError CompareLaserPlanes(const StereoRig& rig,
   return e;
 }
 
+Pose3 TrueFromBelievedWorld(const World& world, const Pose3& X_WCL_believed) {
+  const Pose3 X_WCL =
+      Renderer::OpticalFramePose(world.data(), world.Id(mjOBJ_CAMERA, "camera_left"));
+  return X_WCL * X_WCL_believed.inverse();
+}
+
+PoseError GripperPoseError(const World& world, device::Side side, const Pose3& X_WCL_believed,
+                           const Pose3& X_WE_believed) {
+  const std::string body = std::string(device::ToString(side)) + "_gripper";
+  const Pose3 X_WE = world.BodyPose(world.Id(mjOBJ_BODY, body));
+  const Pose3 X_WT = TrueFromBelievedWorld(world, X_WCL_believed) * X_WE_believed;
+  PoseError e;
+  e.translation_m = (X_WE.translation() - X_WT.translation()).norm();
+  e.rotation_rad = Eigen::AngleAxisd(X_WE.linear().transpose() * X_WT.linear()).angle();
+  return e;
+}
+
 }  // namespace hgrasp::sim

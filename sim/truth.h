@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "device/status.h"
 #include "sim/stereo_rig.h"
 #include "sim/world.h"
 
@@ -76,5 +77,21 @@ struct LaserPlaneError {
 LaserPlaneError CompareLaserPlanes(const StereoRig& rig,
                                    const std::function<Plane(std::int32_t)>& planes_W,
                                    std::int32_t lo, std::int32_t hi);
+
+/// The true W seen from the W the pipeline believes in: X_WtrueWbelieved = X_WCL(true) *
+/// X_WCL(believed)^-1. The pipeline sees the world through its left camera, whose pose it
+/// believes to be X_WCL_believed (head kinematics at the frame's joints); with the head mounted
+/// as modelled this is the identity, with WorldOptions::head_mount_error it is that error seen
+/// from W.
+Pose3 TrueFromBelievedWorld(const World& world, const Pose3& X_WCL_believed);
+
+/// How far the true gripper frame E of arm `side` lies from X_WE_believed (a pose the pipeline
+/// holds in its believed W, e.g. the planned grasp), compared in the true W.
+struct PoseError {
+  double translation_m = 0.0;
+  double rotation_rad = 0.0;
+};
+PoseError GripperPoseError(const World& world, device::Side side, const Pose3& X_WCL_believed,
+                           const Pose3& X_WE_believed);
 
 }  // namespace hgrasp::sim

@@ -154,6 +154,19 @@ World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::mo
   model_ = LoadFromString(xml, "scene.xml");
   model_->vis.headlight.ambient[0] = model_->vis.headlight.ambient[1] =
       model_->vis.headlight.ambient[2] = static_cast<float>(scenario_.ambient);
+  if (!options.head_mount_error.isApprox(Pose3::Identity(), 0.0)) {
+    // X_PT = X_PM * X_MT: the head's body frame in its parent (the torso), displaced.
+    const int head = Id(mjOBJ_BODY, "head_pan_link");
+    mjtNum* pos = model_->body_pos + 3 * head;
+    mjtNum* quat = model_->body_quat + 4 * head;
+    Pose3 X_PM = Pose3::Identity();
+    X_PM.translation() = Eigen::Vector3d(pos[0], pos[1], pos[2]);
+    X_PM.linear() = Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]).toRotationMatrix();
+    const Pose3 X_PT = X_PM * options.head_mount_error;
+    const Eigen::Quaterniond q(X_PT.linear());
+    for (int i = 0; i < 3; ++i) pos[i] = X_PT.translation()[i];
+    quat[0] = q.w(), quat[1] = q.x(), quat[2] = q.y(), quat[3] = q.z();
+  }
   data_ = mj_makeData(model_);
 
   for (const auto& [name, q] : home_q) data_->qpos[model_->jnt_qposadr[Id(mjOBJ_JOINT, name)]] = q;
@@ -250,16 +263,17 @@ void World::ApplyControllers() {
 void World::Step(double duration_s) {
   const int steps = static_cast<int>(std::lround(duration_s / model_->opt.timestep));
   for (int i = 0; i < steps; ++i) {
+    if ((data_->time >= hide_from_s_ && data_->time < hide_until_s_) != leds_hidden_) ApplyLeds();
     ApplyControllers();
     mj_step(model_, data_);
     // MuJoCo answers a diverging simulation by resetting it to the model's zero pose and
     // carrying on: never let that pass silently.
     for (const mjtWarning w : {mjWARN_BADQPOS, mjWARN_BADQVEL, mjWARN_BADQACC, mjWARN_BADCTRL}) {
       if (data_->warning[w].number > 0) {
-        throw std::runtime_error("the simulation became unstable at t = " +
-                                 std::to_string(data_->time) + " s (MuJoCo warning " +
-                                 std::to_string(static_cast<int>(w)) + ", index " +
-                                 std::to_string(data_->warning[w].lastinfo) + ")");
+        throw std::runtime_error(
+            "the simulation became unstable at t = " + std::to_string(data_->time) +
+            " s (MuJoCo warning " + std::to_string(static_cast<int>(w)) + ", index " +
+            std::to_string(data_->warning[w].lastinfo) + ")");
       }
     }
   }
@@ -299,11 +313,24 @@ int World::LedCount(const std::string& side) const {
 }
 
 void World::SetLed(const std::string& side, int index, bool on) {
-  const int geom = Id(mjOBJ_GEOM, side + "_led" + std::to_string(index));
-  const int material = on ? led_on_material_ : led_off_material_;
-  if (model_->geom_matid[geom] != material) {
-    model_->geom_matid[geom] = material;
-    ++appearance_version_;
+  led_switched_on_[Id(mjOBJ_GEOM, side + "_led" + std::to_string(index))] = on;
+  ApplyLeds();
+}
+
+void World::HideLeds(double from_s, double until_s) {
+  hide_from_s_ = from_s;
+  hide_until_s_ = until_s;
+  ApplyLeds();
+}
+
+void World::ApplyLeds() {
+  leds_hidden_ = data_->time >= hide_from_s_ && data_->time < hide_until_s_;
+  for (const auto& [geom, on] : led_switched_on_) {
+    const int material = on && !leds_hidden_ ? led_on_material_ : led_off_material_;
+    if (model_->geom_matid[geom] != material) {
+      model_->geom_matid[geom] = material;
+      ++appearance_version_;
+    }
   }
 }
 

@@ -6,6 +6,7 @@
 #include <mujoco/mujoco.h>
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,11 @@ struct WorldOptions {
   double settle_s = 0.5;  ///< simulated time for the objects to come to rest on the table
   /// MJCF added to <worldbody> besides the scenario's objects (test probes, markers).
   std::string extra_worldbody_xml;
+  /// Where the head is really mounted on the torso relative to the model (and to the URDF the
+  /// pipeline's kinematics read): X_MT, the true mounting T of the head (body head_pan_link, with
+  /// its cameras and laser) in the modelled mounting M. Identity: as modelled. Tests displace it
+  /// to show that the visual servo needs no camera-to-arm calibration.
+  Pose3 head_mount_error = Pose3::Identity();
 };
 
 class World {
@@ -98,6 +104,13 @@ class World {
   void SetLed(const std::string& side, int index, bool on);
   int LedCount(const std::string& side) const;
 
+  /// Hides every LED (they render dark whatever they are switched to) from simulated time
+  /// `from_s` until `until_s`: something passing in front of the hand. Tests of the tracker's
+  /// recovery use it. Replaces any earlier window.
+  void HideLeds(double from_s, double until_s);
+  /// True while the LEDs are hidden.
+  bool leds_hidden() const { return leds_hidden_; }
+
   /// A counter that changes whenever something a camera could see may have changed other than
   /// by motion (LEDs); with the joint positions it keys the renderer's cache.
   std::uint64_t appearance_version() const { return appearance_version_; }
@@ -108,6 +121,8 @@ class World {
     bool active = false, constant_speed = false;
   };
   void ApplyControllers();
+  /// Sets each LED geom's material from its switch and the hiding window.
+  void ApplyLeds();
 
   Scenario scenario_;
   mjModel* model_ = nullptr;
@@ -118,6 +133,9 @@ class World {
   std::vector<int> robot_dofs_;      // dofs that get gravity compensation
   bool laser_on_ = false;
   int led_on_material_ = -1, led_off_material_ = -1;
+  std::map<int, bool> led_switched_on_;  // LED geom -> switched on
+  double hide_from_s_ = 0.0, hide_until_s_ = 0.0;
+  bool leds_hidden_ = false;
   std::uint64_t appearance_version_ = 0;
 };
 

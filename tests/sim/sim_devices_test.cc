@@ -141,6 +141,55 @@ TEST_F(SimDevicesTest, LedsSwitchTheirMaterial) {
   EXPECT_EQ(dev_.leds->Set(Side::kLeft, 1u << 20), Status::kRejected);
 }
 
+// The recovery test's occluder: within the window every LED renders dark whatever it is switched
+// to, and after it the switches hold again.
+TEST_F(SimDevicesTest, HiddenLedsRenderDarkOnlyWithinTheWindow) {
+  World& w = robot_.world();
+  const int led = w.Id(mjOBJ_GEOM, "left_led2");
+  const int on = w.Id(mjOBJ_MATERIAL, "led_on"), off = w.Id(mjOBJ_MATERIAL, "led_off");
+  ASSERT_EQ(dev_.leds->Set(Side::kLeft, 0b100), Status::kOk);
+  const double t0 = w.time();
+  w.HideLeds(t0 + 0.1, t0 + 0.3);
+  device::StereoFrame f;
+  dev_.cameras->Grab(&f);  // t0 + 0.04: before the window
+  EXPECT_FALSE(w.leds_hidden());
+  EXPECT_EQ(w.model()->geom_matid[led], on);
+  for (int i = 0; i < 3; ++i) dev_.cameras->Grab(&f);  // t0 + 0.16: inside
+  EXPECT_TRUE(w.leds_hidden());
+  EXPECT_EQ(w.model()->geom_matid[led], off);
+  ASSERT_EQ(dev_.leds->Set(Side::kLeft, 0b110), Status::kOk);  // switching while hidden
+  EXPECT_EQ(w.model()->geom_matid[w.Id(mjOBJ_GEOM, "left_led1")], off);
+  for (int i = 0; i < 4; ++i) dev_.cameras->Grab(&f);  // t0 + 0.32: after
+  EXPECT_FALSE(w.leds_hidden());
+  EXPECT_EQ(w.model()->geom_matid[led], on);
+  EXPECT_EQ(w.model()->geom_matid[w.Id(mjOBJ_GEOM, "left_led1")], on);
+}
+
+// The hand-eye test's displaced head: the cameras move by exactly the mounting error, seen
+// from the head's mounting frame, and nothing else does.
+TEST(SimHeadMountTest, CamerasMoveByTheMountingError) {
+  const Scenario scenario = testing::ScenarioFromYaml(testing::kEmptyScene);
+  World nominal(scenario);
+  WorldOptions options;
+  options.head_mount_error.linear() =
+      Eigen::AngleAxisd(DegToRad(3.0), Eigen::Vector3d(0, 1, 0)).toRotationMatrix();
+  options.head_mount_error.translation() = Eigen::Vector3d(0.02, 0, 0);
+  World displaced(scenario, options);
+  const int head = nominal.Id(mjOBJ_BODY, "head_pan_link");
+  const Pose3 X_WM = nominal.BodyPose(head);
+  EXPECT_TRUE(displaced.BodyPose(head).isApprox(X_WM * options.head_mount_error, 1e-9));
+  for (const char* camera : {"camera_left", "camera_right"}) {
+    const Pose3 X_WC = Renderer::OpticalFramePose(nominal.data(), nominal.Id(mjOBJ_CAMERA, camera));
+    const Pose3 X_WC2 =
+        Renderer::OpticalFramePose(displaced.data(), displaced.Id(mjOBJ_CAMERA, camera));
+    // X_WC' = X_WM X_MT X_MW X_WC: the same camera pose relative to the mounting.
+    EXPECT_TRUE(X_WC2.isApprox(X_WM * options.head_mount_error * X_WM.inverse() * X_WC, 1e-9))
+        << camera;
+  }
+  const int gripper = nominal.Id(mjOBJ_BODY, "left_gripper");
+  EXPECT_TRUE(displaced.BodyPose(gripper).isApprox(nominal.BodyPose(gripper), 1e-12));
+}
+
 TEST_F(SimDevicesTest, LaserEncoderFollowsAConstantSpeedSweep) {
   ASSERT_EQ(dev_.laser->MoveTo(1500, 2500.0), Status::kOk);  // 25 deg/s
   device::StereoFrame f;
