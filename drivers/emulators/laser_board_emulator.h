@@ -52,7 +52,7 @@ struct LaserBoardEmulatorConfig {
   AxisLimits motor{-4500.0, 4500.0, 9000.0, 225000.0};
   std::int32_t start_count = 0;
   /// LEDs per gripper: 6 (models/humanoid.xml: left_led0..5, right_led0..5).
-  int leds_per_gripper = 6;
+  int leds_per_gripper = 8;
   /// Camera frame period (PAL, 25 frames/s) and the time of the first VSYNC pulse (s).
   double frame_period_s = 0.04;
   double first_frame_s = 0.04;

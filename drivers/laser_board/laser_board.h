@@ -29,9 +29,9 @@ namespace hgrasp::drivers {
 
 /// Driver options. Defaults: the robot's board (models/humanoid.xml) and 115200 8N1 timing.
 struct LaserBoardOptions {
-  /// LEDs per gripper. 6: models/humanoid.xml has left_led0..left_led5 and right_led0..right_led5
+  /// LEDs per gripper. 8: models/humanoid.xml has left_led0..left_led7 and right_led0..right_led7
   /// (read once from the model and hard-coded here; change it if the model changes).
-  int leds_per_gripper = 6;
+  int leds_per_gripper = 8;
   /// Fastest motor speed, encoder counts/s; MoveTo clamps to it as the simulation does. 9000:
   /// models/humanoid.urdf's laser joint velocity limit 1.5708 rad/s (90 deg/s) at 0.01
   /// deg/count (sim::kLaserRadPerCount).

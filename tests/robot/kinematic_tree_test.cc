@@ -301,7 +301,7 @@ TEST_F(HumanoidTest, Structure) {
        {"torso", "head_pan_link", "head_tilt_link", "camera_bracket", "camera_left_link",
         "camera_right_link", "camera_left_optical", "camera_right_optical", "laser_link",
         "laser_plane", "left_base", "left_gripper", "right_gripper", "left_thumb", "right_index",
-        "left_led0", "right_led5"}) {
+        "left_led0", "right_led7"}) {
     EXPECT_NO_THROW(tree_->LinkPose(link, {})) << link;
   }
 }
@@ -398,12 +398,14 @@ TEST_F(HumanoidTest, LaserPlaneMountingError) {
 }
 
 TEST_F(HumanoidTest, LedsAndFingersInTheGripperFrame) {
-  const Vector3d kLeds[6] = {{0.055, 0.027, 0.03},  {-0.055, 0.027, 0.03},  {0, 0.027, 0.01},
-                             {0.055, -0.027, 0.03}, {-0.055, -0.027, 0.03}, {0, -0.027, 0.01}};
+  const Vector3d kLeds[8] = {{0.066, 0.031, -0.006},  {-0.066, 0.031, -0.006},
+                             {0.066, -0.031, -0.006}, {-0.066, -0.031, -0.006},
+                             {0.03, 0.031, 0.046},    {-0.03, 0.031, 0.046},
+                             {0.03, -0.031, 0.046},   {-0.03, -0.031, 0.046}};
   const KinematicTree::JointValues q = {
       {"right_j3", 0.4}, {"right_j5", -0.7}, {"right_thumb_slide", 0.03}};
   const Pose3 X_WE = tree_->LinkPose("right_gripper", q);
-  for (int k = 0; k < 6; ++k) {
+  for (int k = 0; k < 8; ++k) {
     const Pose3 X_WLed = tree_->LinkPose("right_led" + std::to_string(k), q);
     EXPECT_NEAR(((X_WE.inverse() * X_WLed).translation() - kLeds[k]).norm(), 0.0, 1e-12) << k;
   }

@@ -50,8 +50,8 @@ TEST_F(LaserBoardDriverTest, StatusAndVersion) {
   ASSERT_EQ(board_->GetStatus(&s), Status::kOk);
   EXPECT_EQ(s.protocol_version, lb::kProtocolVersion);
   EXPECT_EQ(s.firmware_major, 1);
-  EXPECT_EQ(s.leds_left, 6);
-  EXPECT_EQ(s.leds_right, 6);
+  EXPECT_EQ(s.leds_left, 8);
+  EXPECT_EQ(s.leds_right, 8);
   EXPECT_FALSE(s.laser_on);
 }
 
@@ -112,16 +112,16 @@ TEST_F(LaserBoardDriverTest, MotorVelocityRunsToTheLimit) {
 }
 
 TEST_F(LaserBoardDriverTest, LedsPerGripper) {
-  EXPECT_EQ(leds_.Count(Side::kLeft), 6);
-  EXPECT_EQ(leds_.Count(Side::kRight), 6);
+  EXPECT_EQ(leds_.Count(Side::kLeft), 8);
+  EXPECT_EQ(leds_.Count(Side::kRight), 8);
   ASSERT_EQ(leds_.Set(Side::kRight, 0x15), Status::kOk);
-  ASSERT_EQ(leds_.Set(Side::kLeft, 0x3F), Status::kOk);
+  ASSERT_EQ(leds_.Set(Side::kLeft, 0xFF), Status::kOk);
   EXPECT_EQ(rig_.With([](LaserBoardEmulator& e) { return e.hardware().LedMask(1); }), 0x15u);
-  EXPECT_EQ(rig_.With([](LaserBoardEmulator& e) { return e.hardware().LedMask(0); }), 0x3Fu);
-  EXPECT_EQ(leds_.Set(Side::kLeft, 0x40), Status::kRejected);  // LED 6 does not exist
+  EXPECT_EQ(rig_.With([](LaserBoardEmulator& e) { return e.hardware().LedMask(0); }), 0xFFu);
+  EXPECT_EQ(leds_.Set(Side::kLeft, 0x100), Status::kRejected);  // LED 8 does not exist
   ASSERT_EQ(leds_.Set(Side::kLeft, 0), Status::kOk);
   EXPECT_EQ(rig_.With([](LaserBoardEmulator& e) { return e.hardware().LedMask(0); }), 0u);
-  const std::vector<lb::Command> expected = {lb::SetLeds{1, 0x15}, lb::SetLeds{0, 0x3F},
+  const std::vector<lb::Command> expected = {lb::SetLeds{1, 0x15}, lb::SetLeds{0, 0xFF},
                                              lb::SetLeds{0, 0}};
   EXPECT_EQ(rig_.Executed(), expected);
 }

@@ -60,8 +60,8 @@ TEST(LaserBoardEmulator, ExecutesAndAcknowledges) {
   EXPECT_EQ(status->token, 0x42);
   EXPECT_EQ(status->last_seq, 2);
   EXPECT_TRUE(status->laser_on);
-  EXPECT_EQ(status->leds_left, 6);
-  EXPECT_EQ(status->leds_right, 6);
+  EXPECT_EQ(status->leds_left, 8);
+  EXPECT_EQ(status->leds_right, 8);
 
   const std::vector<lb::Command> expected = {lb::SetLaser{true}, lb::SetLeds{1, 0x2D}};
   EXPECT_EQ(board.ExecutedCommands(), expected);
@@ -121,7 +121,7 @@ TEST(LaserBoardEmulator, StrictFrameChecking) {
        {lb::Command{lb::MotorGoTo{4501, 100}}, lb::Command{lb::MotorGoTo{-4501, 100}},
         lb::Command{lb::MotorGoTo{0, 0}}, lb::Command{lb::MotorGoTo{0, 9001}},
         lb::Command{lb::MotorVelocity{-9001}}, lb::Command{lb::SetLeds{2, 1}},
-        lb::Command{lb::SetLeds{0, 0x40}}}) {
+        lb::Command{lb::SetLeds{0, 0x100}}}) {
     r = SendOne(board, seq++, c, 0.05);
     EXPECT_FALSE(r.ack);
     EXPECT_EQ(r.error, lb::ErrorCode::kOutOfRange);
