@@ -1,11 +1,13 @@
 #include "servo/gripper_tracker.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <tuple>
 #include <utility>
 
 #include "common/error.h"
+#include "common/pinhole_camera.h"
 #include "servo/gripper_pose.h"
 
 namespace hgrasp::servo {
@@ -43,11 +45,14 @@ GripperTracker::GripperTracker(device::Side side, LedLayout layout, robot::Stere
   last_leds_.resize(layout_.size());
 }
 
+Pose3 GripperTracker::X_CLCR(double verge) const {
+  return head_.X_HC(robot::HeadKinematics::kLeft, verge).inverse() *
+         head_.X_HC(robot::HeadKinematics::kRight, verge);
+}
+
 const scan::Rectification& GripperTracker::RectificationAt(double verge) {
   if (!rect_verge_ || *rect_verge_ != verge) {
-    const Pose3 X_CLCR = head_.X_HC(robot::HeadKinematics::kLeft, verge).inverse() *
-                         head_.X_HC(robot::HeadKinematics::kRight, verge);
-    rect_ = scan::MakeRectification(cameras_.left, cameras_.right, X_CLCR);
+    rect_ = scan::MakeRectification(cameras_.left, cameras_.right, X_CLCR(verge));
     rect_verge_ = verge;
   }
   return rect_;
@@ -125,11 +130,61 @@ bool GripperTracker::Fuse(const std::vector<LedPoint>& points, const std::vector
   return true;
 }
 
+std::vector<int> GripperTracker::AssociateBlobs(const std::vector<LedBlob>& blobs,
+                                                const PinholeCamera& camera, const Pose3& X_KCL,
+                                                const Pose3& X_CE) const {
+  // Greedy global nearest neighbour between blobs and projected LEDs, one to one.
+  std::vector<std::tuple<double, int, int>> pairs;  // distance, blob, LED
+  for (int i = 0; i < layout_.size(); ++i) {
+    const auto px = camera.Project(X_KCL * (X_CE * layout_.p_E[i]));
+    if (!px) continue;
+    for (std::size_t b = 0; b < blobs.size(); ++b) {
+      const double d = (*px - blobs[b].px).norm();
+      if (d <= options_.image_gate_px) pairs.emplace_back(d, static_cast<int>(b), i);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<int> blob_of_led(layout_.size(), -1);
+  std::vector<bool> blob_used(blobs.size(), false);
+  for (const auto& [d, b, i] : pairs) {
+    if (blob_used[b] || blob_of_led[i] >= 0) continue;
+    blob_used[b] = true;
+    blob_of_led[i] = b;
+  }
+  // The gripper's LEDs lie at about the same depth and image alike: a blob much smaller than
+  // the median of its fellows is a partly hidden LED, whose centroid lies off the LED's centre.
+  std::vector<double> areas;
+  for (int b : blob_of_led) {
+    if (b >= 0) areas.push_back(blobs[b].area_px);
+  }
+  if (areas.size() >= 3) {
+    std::nth_element(areas.begin(), areas.begin() + areas.size() / 2, areas.end());
+    const double median = areas[areas.size() / 2];
+    for (int& b : blob_of_led) {
+      if (b >= 0 && blobs[b].area_px < options_.min_blob_area_ratio * median) b = -1;
+    }
+  }
+  return blob_of_led;
+}
+
 bool GripperTracker::MeasureTracked(const device::StereoFrame& frame) {
   PredictTo(frame.t_s);
-  const std::vector<LedPoint> points = Points(frame);
-  // Greedy global nearest neighbour between the points and the LEDs' predicted positions.
+  const std::vector<LedBlob> left = DetectLeds(frame.left, options_.detector);
+  const std::vector<LedBlob> right = DetectLeds(frame.right, options_.detector);
+  const scan::Rectification& rect = RectificationAt(frame.head.verge);
   const Pose3 X_CE = filter_.pose();
+  // Association guided by the prediction: each blob goes to the LED whose projection lies
+  // nearest in its own image (unguided row matching pairs the wrong blobs when several LEDs
+  // share a row).
+  const std::vector<int> in_left = AssociateBlobs(left, cameras_.left, Pose3::Identity(), X_CE);
+  const std::vector<int> in_right =
+      AssociateBlobs(right, cameras_.right, X_CLCR(frame.head.verge).inverse(), X_CE);
+  // The pose that best reprojects every associated blob of both images (the paper's measurement:
+  // each pixel weighs as much as it is worth, where a triangulated point is several times less
+  // certain in depth than across).
+  if (MeasureInImages(left, right, in_left, in_right, frame.head.verge)) return true;
+  // The prediction may be too far off for the image gate: unguided stereo, associated in 3D.
+  std::vector<LedPoint> points = MatchAndTriangulate(left, right, cameras_, rect, options_.match);
   std::vector<std::tuple<double, int, int>> pairs;  // distance, point, LED
   for (std::size_t k = 0; k < points.size(); ++k) {
     for (int i = 0; i < layout_.size(); ++i) {
@@ -146,6 +201,117 @@ bool GripperTracker::MeasureTracked(const device::StereoFrame& frame) {
     led_used[i] = true;
   }
   return Fuse(points, ids, /*first=*/false);
+}
+
+namespace {
+
+// X turned and moved by d = (dtheta, dp), left perturbation in C: R' = Exp(dtheta) R, p' = p + dp.
+Pose3 Perturb(const Pose3& X, const Eigen::Matrix<double, 6, 1>& d) {
+  Pose3 Y = X;
+  Y.linear() = ExpRotation(d.head<3>()).toRotationMatrix() * X.linear();
+  Y.translation() += d.tail<3>();
+  return Y;
+}
+
+}  // namespace
+
+bool GripperTracker::MeasureInImages(const std::vector<LedBlob>& left,
+                                     const std::vector<LedBlob>& right,
+                                     const std::vector<int>& in_left,
+                                     const std::vector<int>& in_right, double verge) {
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  const std::array<Pose3, 2> X_KCL = {Pose3::Identity(), X_CLCR(verge).inverse()};
+  const std::array<const PinholeCamera*, 2> camera = {&cameras_.left, &cameras_.right};
+  struct Observation {
+    int camera, led;
+    Eigen::Vector2d px;
+  };
+  std::vector<Observation> observations;
+  std::vector<bool> led_seen(layout_.size(), false);
+  const Pose3 X_CE0 = filter_.pose();
+  for (int i = 0; i < layout_.size(); ++i) {
+    if (in_left[i] >= 0) observations.push_back({0, i, left[in_left[i]].px});
+    if (in_right[i] >= 0) observations.push_back({1, i, right[in_right[i]].px});
+    led_seen[i] = in_left[i] >= 0 || in_right[i] >= 0;
+  }
+  const int distinct = static_cast<int>(std::count(led_seen.begin(), led_seen.end(), true));
+  if (observations.size() < 4 || distinct < 3) return false;
+
+  // Gauss-Newton on the reprojection error from the predicted pose (numeric Jacobian: a handful
+  // of observations and 6 parameters). A partly hidden LED's blob is off its centre: while more
+  // than 4 observations remain, the one with the largest residual beyond 2 pixel_std is dropped
+  // and the pose refitted.
+  auto residuals = [&](const Pose3& X, Eigen::VectorXd* r) {
+    r->resize(2 * static_cast<int>(observations.size()));
+    for (std::size_t k = 0; k < observations.size(); ++k) {
+      const Observation& o = observations[k];
+      const auto px = camera[o.camera]->Project(X_KCL[o.camera] * (X * layout_.p_E[o.led]));
+      if (!px) return false;
+      r->segment<2>(2 * static_cast<int>(k)) = *px - o.px;
+    }
+    return true;
+  };
+  Pose3 X = X_CE0;
+  Eigen::VectorXd r0, r1;
+  Eigen::MatrixXd J;
+  for (;;) {
+    X = X_CE0;
+    J.resize(2 * static_cast<int>(observations.size()), 6);
+    for (int iteration = 0; iteration < 10; ++iteration) {
+      if (!residuals(X, &r0)) return false;
+      constexpr double kStep = 1e-6;
+      for (int j = 0; j < 6; ++j) {
+        if (!residuals(Perturb(X, kStep * Vector6d::Unit(j)), &r1)) return false;
+        J.col(j) = (r1 - r0) / kStep;
+      }
+      const Vector6d delta = (J.transpose() * J).ldlt().solve(-J.transpose() * r0);
+      if (!delta.allFinite()) return false;
+      X = Perturb(X, delta);
+      if (delta.norm() < 1e-9) break;
+    }
+    if (!residuals(X, &r0)) return false;
+    std::size_t worst = 0;
+    for (std::size_t k = 1; k < observations.size(); ++k) {
+      if (r0.segment<2>(2 * static_cast<int>(k)).norm() >
+          r0.segment<2>(2 * static_cast<int>(worst)).norm()) {
+        worst = k;
+      }
+    }
+    if (observations.size() <= 4 ||
+        r0.segment<2>(2 * static_cast<int>(worst)).norm() <= 2.0 * options_.pixel_std) {
+      break;
+    }
+    observations.erase(observations.begin() + static_cast<std::ptrdiff_t>(worst));
+  }
+  led_seen.assign(layout_.size(), false);
+  for (const Observation& o : observations) led_seen[o.led] = true;
+  if (std::count(led_seen.begin(), led_seen.end(), true) < 3) return false;
+  const double rms = std::sqrt(r0.squaredNorm() / static_cast<double>(observations.size()));
+  if (rms > options_.max_reprojection_rms_px) return false;
+  // Covariance of (dtheta, dp), reordered to the filter's (p, theta).
+  const Eigen::Matrix<double, 6, 6> info = J.transpose() * J;
+  Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(info);
+  if (!lu.isInvertible()) return false;
+  const Eigen::Matrix<double, 6, 6> cov_tp = options_.pixel_std * options_.pixel_std * lu.inverse();
+  PoseFilter::Matrix6d cov;
+  cov.topLeftCorner<3, 3>() = cov_tp.bottomRightCorner<3, 3>();
+  cov.bottomRightCorner<3, 3>() = cov_tp.topLeftCorner<3, 3>();
+  cov.topRightCorner<3, 3>() = cov_tp.bottomLeftCorner<3, 3>();
+  cov.bottomLeftCorner<3, 3>() = cov_tp.topRightCorner<3, 3>();
+  cov = 0.5 * (cov + cov.transpose()).eval();
+  PoseFilter trial = filter_;
+  const double nis = trial.Update(X, cov);
+  if (!(nis <= options_.max_nis)) return false;
+  filter_ = std::move(trial);
+  last_nis_ = nis;
+  last_leds_.assign(layout_.size(), std::nullopt);
+  for (int i = 0; i < layout_.size(); ++i) {
+    if (led_seen[i]) last_leds_[i] = X * layout_.p_E[i];
+  }
+  last_fit_rms_ = 0.0;
+  ++measurements_;
+  ++image_measurements_;
+  return true;
 }
 
 TrackerStatus GripperTracker::Initialise(device::Leds& leds, device::StereoCamera& camera) {
@@ -219,6 +385,13 @@ TrackerStatus GripperTracker::Initialise(device::Leds& leds, device::StereoCamer
   has_orientation_ = false;
   lost_ = was_lost;
   return TrackerStatus::kNotFound;
+}
+
+void GripperTracker::CarryThroughCameraMove(const Pose3& X_CnewC) {
+  if (filter_.initialised()) filter_.ChangeFrame(X_CnewC);
+  for (std::optional<Eigen::Vector3d>& p : last_leds_) {
+    if (p) p = X_CnewC * *p;
+  }
 }
 
 TrackerStatus GripperTracker::Track(const device::StereoFrame& frame) {

@@ -54,6 +54,18 @@ struct GripperTrackerOptions {
   double max_led_residual = 0.0015;
   /// A fitted pose whose RMS residual exceeds this (m) is rejected (a wrong association).
   double max_fit_rms = 0.004;
+  /// Image-level fallback (the paper's form of measurement), used when fewer than 3 LEDs are
+  /// triangulated: every blob in either image is associated to the LED whose projection through
+  /// the predicted pose lies nearest, within this many pixels ...
+  double image_gate_px = 8.0;
+  /// ... and the pose minimising the reprojection error of at least 4 such blobs of at least 3
+  /// LEDs is fused, with this pixel noise (std dev, px) ...
+  double pixel_std = 1.0;
+  /// ... unless its RMS reprojection error exceeds this (px).
+  double max_reprojection_rms_px = 1.5;
+  /// While tracking, a blob smaller than this fraction of the median area of the gripper's
+  /// blobs in the same image is taken for a partly hidden LED and not used.
+  double min_blob_area_ratio = 0.7;
   /// A pose measurement whose normalised innovation squared (6 dof) exceeds this is rejected.
   double max_nis = 100.0;
   /// lost() after this many frames in a row without a pose measurement (10 frames = 0.4 s).
@@ -88,6 +100,11 @@ class GripperTracker {
   /// One frame with all LEDs on (see the file comment). Frames must come in time order.
   TrackerStatus Track(const device::StereoFrame& frame);
 
+  /// The cameras moved (the head turned) between frames: X_CnewC is the old camera frame seen
+  /// from the new one (servo::HeadTracker::X_CnewC). Carries the filter's state into the new
+  /// frame so that tracking goes on without a jump. Nothing to do before Initialise.
+  void CarryThroughCameraMove(const Pose3& X_CnewC);
+
   bool lost() const { return lost_; }
   /// True after a successful Initialise, until lost.
   bool tracking() const { return tracking_; }
@@ -107,6 +124,8 @@ class GripperTracker {
   std::int64_t flashes() const { return flashes_; }            ///< single-LED flash frames
   std::int64_t recoveries() const { return recoveries_; }      ///< Initialise successes after lost
   std::int64_t measurements() const { return measurements_; }  ///< poses fused
+  /// Of those, poses from the image-level fallback (MeasureInImages).
+  std::int64_t image_measurements() const { return image_measurements_; }
 
  private:
   const scan::Rectification& RectificationAt(double verge);
@@ -116,8 +135,22 @@ class GripperTracker {
   /// Fits the identified LEDs (ids[k] = LED of points[k], or -1) and fuses the pose: `first`
   /// starts the filter from it, else it is a (gated) update. True when fused.
   bool Fuse(const std::vector<LedPoint>& points, const std::vector<int>& ids, bool first);
-  /// Predicts to the frame, associates its points by the predicted pose and fuses the fit.
+  /// Predicts to the frame, associates its points by the predicted pose and fuses the fit; when
+  /// that fails, MeasureInImages.
   bool MeasureTracked(const device::StereoFrame& frame);
+  /// The image-level measurement (see GripperTrackerOptions::image_gate_px): blobs of both images
+  /// against the LEDs' projections, Gauss-Newton on the reprojection error from the predicted
+  /// pose, fused with the covariance pixel_std^2 (J^T J)^-1.
+  bool MeasureInImages(const std::vector<LedBlob>& left, const std::vector<LedBlob>& right,
+                       const std::vector<int>& in_left, const std::vector<int>& in_right,
+                       double verge);
+  /// For each LED, the blob nearest its projection through X_CE (within image_gate_px, one to
+  /// one), or -1: `camera` at X_KCL (the camera seen from CL).
+  std::vector<int> AssociateBlobs(const std::vector<LedBlob>& blobs, const PinholeCamera& camera,
+                                  const Pose3& X_KCL, const Pose3& X_CE) const;
+  /// The right camera's optical frame in the left one's at a verge angle.
+  Pose3 X_CLCR(double verge) const;
+
   TrackerStatus Grab(device::StereoCamera& camera, device::StereoFrame* frame);
   TrackerStatus SetLeds(device::Leds& leds, std::uint32_t mask);
 
@@ -141,6 +174,7 @@ class GripperTracker {
   double last_nis_ = 0.0;
   device::Status device_status_ = device::Status::kOk;
   std::int64_t frames_ = 0, flashes_ = 0, recoveries_ = 0, measurements_ = 0;
+  std::int64_t image_measurements_ = 0;
 };
 
 }  // namespace hgrasp::servo

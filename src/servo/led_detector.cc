@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <opencv2/imgproc.hpp>
 #include <tuple>
+#include <vector>
 
 namespace hgrasp::servo {
 
@@ -31,11 +32,26 @@ std::vector<LedBlob> DetectLeds(const cv::Mat& bgr, const LedDetectorConfig& con
     const int w = stats.at<int>(i, cv::CC_STAT_WIDTH), h = stats.at<int>(i, cv::CC_STAT_HEIGHT);
     if (std::max(w, h) > config.max_elongation * std::min(w, h)) continue;
     // Centroid over the blob's box grown by `margin` px, pixels of other blobs left out,
-    // weighted by redness above the floor: the mask's threshold would cut the blob's rim
-    // unevenly and bias a centroid over the mask alone by up to a tenth of a pixel.
+    // weighted by redness above the floor and by red above the background's: the mask's
+    // threshold would cut the blob's rim unevenly and bias a centroid over the mask alone by up
+    // to a tenth of a pixel; the background term keeps a red surface around the LED out of it.
     const int m = config.centroid_margin_px;
     const int ua = std::max(0, u0 - m), ub = std::min(bgr.cols - 1, u0 + w - 1 + m);
     const int va = std::max(0, v0 - m), vb = std::min(bgr.rows - 1, v0 + h - 1 + m);
+    // The background's red level: the median red of the grown box's rim (not this blob).
+    std::vector<int> rim;
+    for (int v = va; v <= vb; ++v) {
+      const int* l = labels.ptr<int>(v);
+      const cv::Vec3b* px = bgr.ptr<cv::Vec3b>(v);
+      for (int u = ua; u <= ub; ++u) {
+        if ((v == va || v == vb || u == ua || u == ub) && l[u] == 0) rim.push_back(px[u][2]);
+      }
+    }
+    double red_background = 0.0;
+    if (!rim.empty()) {
+      std::nth_element(rim.begin(), rim.begin() + rim.size() / 2, rim.end());
+      red_background = rim[rim.size() / 2];
+    }
     double sw = 0, su = 0, sv = 0, peak = 0;
     for (int v = va; v <= vb; ++v) {
       const int* l = labels.ptr<int>(v);
@@ -43,7 +59,9 @@ std::vector<LedBlob> DetectLeds(const cv::Mat& bgr, const LedDetectorConfig& con
       for (int u = ua; u <= ub; ++u) {
         if (l[u] != 0 && l[u] != i) continue;
         if (l[u] == i) peak = std::max(peak, static_cast<double>(r[u]));
-        const double wt = r[u] - config.weight_floor;
+        // Red above the background's red too: a red surface around the LED adds no weight.
+        const double wt =
+            std::min(r[u] - config.weight_floor, bgr.at<cv::Vec3b>(v, u)[2] - red_background);
         if (wt <= 0) continue;
         sw += wt;
         su += wt * u;

@@ -35,7 +35,8 @@ struct LedDetectorConfig {
   /// and long) is no LED.
   double max_elongation = 3.0;
   /// The centroid sums redness above this floor (the background's redness is about 0 give or
-  /// take the camera noise) ...
+  /// take the camera noise), capped by the pixel's red above the background's (the median red
+  /// of the grown box's rim: a red surface behind the LED would pull the centroid) ...
   double weight_floor = 10.0;
   /// ... over the blob's bounding box grown by this many pixels.
   int centroid_margin_px = 3;

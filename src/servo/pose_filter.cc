@@ -210,6 +210,18 @@ bool PoseFilter::converged() const {
          (rotation_std().array() < options_.converged_rotation_std).all();
 }
 
+void PoseFilter::ChangeFrame(const Pose3& X_NC) {
+  HGRASP_DEMAND_MSG(initialised_, "PoseFilter::ChangeFrame before Initialise");
+  const Eigen::Matrix3d R = X_NC.linear();
+  p_ = R * p_ + X_NC.translation();
+  v_ = R * v_;
+  q_ = (Eigen::Quaterniond(R) * q_).normalized();
+  w_ = R * w_;
+  Matrix12d J = Matrix12d::Zero();
+  for (int k = 0; k < 4; ++k) J.block<3, 3>(3 * k, 3 * k) = R;
+  P_ = J * P_ * J.transpose();
+}
+
 Pose3 PoseFilter::pose() const {
   Pose3 X = Pose3::Identity();
   X.linear() = q_.toRotationMatrix();

@@ -87,6 +87,11 @@ class PoseFilter {
   /// Fuses a measured position only (3 dof), e.g. the LEDs' mean. @return NIS (3 dof).
   double UpdatePosition(const Eigen::Vector3d& p_CE, double position_std);
 
+  /// Re-expresses the state in another frame N, given X_NC (the camera moved: N is the camera's
+  /// new pose, X_NC where the old one is seen from it). Position, velocity, orientation,
+  /// angular velocity and the covariance (all in C, left rotation error) are carried exactly.
+  void ChangeFrame(const Pose3& X_NC);
+
   bool initialised() const { return initialised_; }
   /// True when every position std dev and every rotation std dev is below the options' limits.
   bool converged() const;

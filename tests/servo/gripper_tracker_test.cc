@@ -26,11 +26,13 @@ namespace {
 
 TEST(LedLayout, SimFileMatchesModel) {
   const LedLayouts l = LoadLedLayouts(ResolveDataPath("calibration/sim/leds.yaml"));
-  ASSERT_EQ(l.left.size(), 6);
-  ASSERT_EQ(l.right.size(), 6);
-  // models/humanoid.xml: left_led0 at (0.055, 0.027, 0.03), left_led5 at (0, -0.027, 0.01).
-  EXPECT_LT((l.left.p_E[0] - Eigen::Vector3d(0.055, 0.027, 0.03)).norm(), 1e-12);
-  EXPECT_LT((l.Of(device::Side::kRight).p_E[5] - Eigen::Vector3d(0, -0.027, 0.01)).norm(), 1e-12);
+  ASSERT_EQ(l.left.size(), 8);
+  ASSERT_EQ(l.right.size(), 8);
+  // models/humanoid.xml: left_led0 at (0.066, 0.031, -0.006), right_led7 at (-0.03, -0.031,
+  // 0.046).
+  EXPECT_LT((l.left.p_E[0] - Eigen::Vector3d(0.066, 0.031, -0.006)).norm(), 1e-12);
+  EXPECT_LT((l.Of(device::Side::kRight).p_E[7] - Eigen::Vector3d(-0.03, -0.031, 0.046)).norm(),
+            1e-12);
 }
 
 std::string WriteTemp(const std::string& name, const std::string& text) {
@@ -76,8 +78,8 @@ class SimTracker : public ::testing::Test {
         layouts_(LoadLedLayouts(ResolveDataPath("calibration/sim/leds.yaml"))) {}
 
   // Joints that put arm `side`'s gripper at `p_W` pointing along `approach_W`, its +y face
-  // (LEDs 0-2) turned towards the left camera and then by `tilt` about the approach axis (as in
-  // led_detector_test.cc); nullopt when unreachable.
+  // (LEDs 0, 1, 4 and 5) turned towards the left camera and then by `tilt` about the approach axis
+  // (as in led_detector_test.cc); nullopt when unreachable.
   std::optional<device::Joint6> JointsFor(device::Side side, const Eigen::Vector3d& p_W,
                                           const Eigen::Vector3d& approach_W, double tilt) {
     return testing::JointsFacingCamera(robot_, dev_, side, p_W, approach_W, tilt);

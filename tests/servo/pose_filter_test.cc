@@ -282,5 +282,45 @@ TEST(RotationMapsTest, ExpAndLogAreInverse) {
   }
 }
 
+// The head turns mid-track: a filter carried into the new camera frame N and fed the same
+// measurements seen from N ends exactly where the filter that stayed in C ends, seen from N.
+TEST(PoseFilterTest, ChangeFrameCarriesStateAndCovariance) {
+  const Truth truth;
+  Noise noise(11, {0.002, 0.02});
+  Pose3 X_NC = Pose3::Identity();
+  X_NC.linear() = ExpRotation(Eigen::Vector3d(0.1, -0.25, 0.05)).toRotationMatrix();
+  X_NC.translation() = Eigen::Vector3d(0.03, 0.01, -0.02);
+  // Anisotropic measurement covariance (in C), and the same seen from N.
+  PoseFilter::Matrix6d cov_C = PoseFilter::Matrix6d::Zero();
+  cov_C.diagonal() << 1e-6, 4e-6, 16e-6, 1e-4, 4e-4, 9e-4;
+  PoseFilter::Matrix6d J = PoseFilter::Matrix6d::Zero();
+  J.topLeftCorner<3, 3>() = J.bottomRightCorner<3, 3>() = X_NC.linear();
+  const PoseFilter::Matrix6d cov_N = J * cov_C * J.transpose();
+  PoseFilter in_c, carried;
+  in_c.Initialise(truth.At(0), {0.002, 0.02});
+  carried.Initialise(truth.At(0), {0.002, 0.02});
+  for (int k = 1; k <= 40; ++k) {
+    const Pose3 z = noise.Measure(truth.At(k * kDt));
+    in_c.Predict(kDt);
+    in_c.Update(z, cov_C);
+    carried.Predict(kDt);
+    if (k < 20) {
+      carried.Update(z, cov_C);
+    } else {
+      if (k == 20) carried.ChangeFrame(X_NC);
+      carried.Update(X_NC * z, cov_N);
+    }
+  }
+  const Pose3 expected = X_NC * in_c.pose();
+  EXPECT_LT((carried.pose().translation() - expected.translation()).norm(), 1e-9);
+  EXPECT_LT(RotationError(carried.pose(), expected), 1e-9);
+  EXPECT_LT((carried.velocity() - X_NC.linear() * in_c.velocity()).norm(), 1e-9);
+  EXPECT_LT((carried.angular_velocity() - X_NC.linear() * in_c.angular_velocity()).norm(), 1e-9);
+  PoseFilter::Matrix12d J12 = PoseFilter::Matrix12d::Zero();
+  for (int b = 0; b < 4; ++b) J12.block<3, 3>(3 * b, 3 * b) = X_NC.linear();
+  EXPECT_LT((carried.covariance() - J12 * in_c.covariance() * J12.transpose()).norm(),
+            1e-9 * in_c.covariance().norm());
+}
+
 }  // namespace
 }  // namespace hgrasp::servo

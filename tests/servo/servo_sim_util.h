@@ -15,8 +15,9 @@
 namespace hgrasp::servo::testing {
 
 /// Joints that put arm `side`'s gripper at `p_W` pointing along `approach_W`, its palm's +y face
-/// (LEDs 0-2) turned towards the left camera and then by `tilt` (rad) about the approach axis:
-/// the analytic solution within limits nearest the arm's joints now; nullopt when unreachable.
+/// (LEDs 0, 1, 4 and 5) turned towards the left camera and then by `tilt` (rad) about the approach
+/// axis: the analytic solution within limits nearest the arm's joints now; nullopt when
+/// unreachable.
 inline std::optional<device::Joint6> JointsFacingCamera(
     sim::SimRobot& robot, device::RobotDevices& dev, device::Side side, const Eigen::Vector3d& p_W,
     const Eigen::Vector3d& approach_W, double tilt) {
