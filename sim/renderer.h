@@ -35,8 +35,9 @@ class Renderer {
   /// Renders camera `camera_id` of the model in state `data` (kinematics must be current).
   CameraImages Render(const mjData* data, int camera_id);
 
-  /// Colour only (one render pass and no depth read-back, about a third of Render's cost): what
-  /// a camera sees when no light sheet needs the scene's geometry.
+  /// Colour only (one render pass, no depth read-back, shadows from a map of at most
+  /// kColorShadowSize^2 texels): what a camera sees when no light sheet needs the scene's
+  /// geometry, at about a third of Render's cost.
   cv::Mat RenderColor(const mjData* data, int camera_id);
 
   /// Intrinsics of camera `camera_id` for this renderer's image size (from cam_fovy).
@@ -48,6 +49,9 @@ class Renderer {
   /// What renders: "EGL device 0 (...)" or "Mesa surfaceless (llvmpipe ...)".
   std::string DeviceDescription() const;
 
+  /// Largest shadow map of the colour-only renders (texels a side).
+  static constexpr int kColorShadowSize = 1024;
+
   int width() const { return width_; }
   int height() const { return height_; }
 
@@ -58,6 +62,7 @@ class Renderer {
   mjvScene scene_;
   mjvOption option_;
   mjrContext context_;
+  mjrContext color_context_;  // the same, with a smaller shadow map (RenderColor)
   std::vector<unsigned char> rgb_;
   std::vector<float> depth_;
 };

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "sim/stereo_rig.h"
 #include "tests/sim/sim_test_util.h"
@@ -155,8 +156,9 @@ objects:
   }
 }
 
-// The colour-only path (the servo's frames) gives the very pixels of the full render.
-TEST(RenderColorTest, ColourOnlyRenderEqualsFullRendersColour) {
+// The colour-only path (the servo's frames) gives the full render's pixels but along the
+// shadows' edges (its shadow map is coarser).
+TEST(RenderColorTest, ColourOnlyRenderMatchesFullRendersColour) {
   World world(ScenarioFromYaml(R"(name: colour
 objects:
   - {name: a, shape: box, size: [0.06, 0.09, 0.12], position: [0.30, 0.06], yaw_deg: 25, color: [0.95, 0.85, 0.1]}
@@ -166,7 +168,15 @@ objects:
     const cv::Mat color = rig.renderer().RenderColor(world.data(), rig.camera_id(cam));
     const cv::Mat full = rig.renderer().Render(world.data(), rig.camera_id(cam)).color;
     ASSERT_EQ(color.size(), full.size());
-    EXPECT_EQ(cv::norm(color, full, cv::NORM_INF), 0.0) << "camera " << cam;
+    cv::Mat diff;
+    cv::absdiff(color, full, diff);
+    cv::Mat grey;
+    cv::cvtColor(diff, grey, cv::COLOR_BGR2GRAY);
+    const double off = cv::countNonZero(grey > 8) / static_cast<double>(grey.total());
+    std::printf("camera %d: mean difference %.3f grey levels, %.2f %% of pixels beyond 8\n", cam,
+                cv::mean(grey)[0], 100.0 * off);
+    EXPECT_LT(cv::mean(grey)[0], 0.5) << "camera " << cam;
+    EXPECT_LT(off, 0.01) << "camera " << cam;
     EXPECT_GT(cv::norm(color, cv::NORM_L1), 0.0);
   }
   // Exposures with the laser off come from colour-only renders.

@@ -240,7 +240,7 @@ TEST(StripeTest, InterferenceStripesAppearWithOurLaserOff) {
     for (int k = 0; k < 5; ++k) {
       world.Step(0.3);
       const StereoImages img = rig.Expose(k);
-      const cv::Mat diff = RedDifference(img.image[kLeft], rig.View(kLeft).images.color);
+      const cv::Mat diff = RedDifference(img.image[kLeft], rig.Color(kLeft));
       bright += cv::countNonZero(diff > 20);
     }
     if (with) {
