@@ -1,7 +1,8 @@
 # hgrasp: `make run` and `make test` take a fresh Debian 12 machine from clone to result.
 # deps   installs the Debian packages that are missing (idempotent; sudo only when not root)
 # build  configures and builds (Release) in build/
-# run    builds, then scans the default scenario headless into out/default/
+# run    builds, then runs the whole grasp (hgrasp run) on the default scenario headless into
+#        out/default/
 # test   builds, then runs every test (ctest)
 # bench  builds, then runs the benchmarks in tests/bench/
 # fuzz   builds the protocol decoders' libFuzzer targets with clang (ASan + UBSan) in build-fuzz/
@@ -43,8 +44,8 @@ build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
 run: build
-	./$(BUILD)/hgrasp plan $(SCENARIO) --out $(OUT)
-	@echo "make run: $(OUT)/grasp.png (the planned grasp), models.png, segments.png, range.png, models.obj, report.json"
+	./$(BUILD)/hgrasp run $(SCENARIO) --out $(OUT)
+	@echo "make run: $(OUT)/servo_*.png (tracked and target hand at key moments), left.avi (the left camera), grasp.png, models.png, segments.png, range.png, models.obj, report.json"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)

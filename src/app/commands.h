@@ -22,6 +22,7 @@ int Render(const RenderOptions& options);
 struct CalibrationFiles {
   std::string cameras = "calibration/sim/cameras.yaml";
   std::string laser = "calibration/sim/laser.yaml";
+  std::string leds = "calibration/sim/leds.yaml";  ///< LED positions on each gripper
 };
 
 struct CalibrateLaserOptions {
@@ -57,6 +58,19 @@ int Model(const ModelOptions& options);
 /// `hgrasp plan`: `hgrasp model`, then the grasp of the target (paper 5.3): grasp.png and the
 /// grasp in report.json; exit 1 when no grasp is reachable.
 int Plan(const ModelOptions& options);
+
+struct RunOptions {
+  std::string scenario;
+  std::string out_dir;
+  CalibrationFiles files;
+  bool video = true;  ///< write left.avi, the left camera through the whole run
+};
+
+/// `hgrasp run`: the whole task (look, plan, approach, servo, close, lift): the outputs of
+/// `hgrasp plan`, servo_*.png (Figure 9: the tracked and the target hand over the left image at
+/// key moments), left.avi and report.json with the result, the servo's figures and timings;
+/// exit 1 when the task failed (the failure named in the report).
+int Run(const RunOptions& options);
 
 struct EmulateOptions {
   std::string device;          ///< val2, biclops, sensorhand or laser_board

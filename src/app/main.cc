@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
     cmd->add_option("--out", *out_dir, "output directory")->required();
     cmd->add_option("--cameras", files->cameras, "camera intrinsics YAML");
     cmd->add_option("--laser", files->laser, "laser calibration YAML");
+    cmd->add_option("--leds", files->leds, "LED positions on the grippers YAML");
     return cmd;
   };
 
@@ -65,6 +66,15 @@ int main(int argc, char** argv) {
   CLI::App* cmd_plan = scene_command(
       "plan", "As `model`, then the grasp of the target: grasp.png, the grasp in report.json",
       &plan.scenario, &plan.out_dir, &plan.files);
+
+  hgrasp::app::RunOptions run;
+  CLI::App* cmd_run = scene_command(
+      "run",
+      "The whole task: look, plan, approach, visual servo, grasp, lift and hold; the outputs of "
+      "`plan`, servo_*.png, left.avi, the result and the servo's figures in report.json",
+      &run.scenario, &run.out_dir, &run.files);
+  cmd_run->add_flag(
+      "--no-video", [&run](std::int64_t) { run.video = false; }, "do not write left.avi");
 
   hgrasp::app::EmulateOptions emulate;
   CLI::App* cmd_emulate = app.add_subcommand(
@@ -90,6 +100,7 @@ int main(int argc, char** argv) {
     if (*cmd_scan) return hgrasp::app::Scan(scan);
     if (*cmd_model) return hgrasp::app::Model(model);
     if (*cmd_plan) return hgrasp::app::Plan(plan);
+    if (*cmd_run) return hgrasp::app::Run(run);
     if (*cmd_emulate) return hgrasp::app::Emulate(emulate);
   } catch (const hgrasp::InputError& e) {
     std::fprintf(stderr, "hgrasp: %s\n", e.what());

@@ -11,6 +11,7 @@
 
 #include "app/commands.h"
 #include "app/devices.h"
+#include "app/look_report.h"
 #include "app/pictures.h"
 #include "common/paths.h"
 #include "grasp/grasp_planner.h"
@@ -29,16 +30,13 @@
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
 #include "sim/truth.h"
+#include "task/grasp_task.h"
 
 namespace hgrasp::app {
 namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 nlohmann::json Vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -48,63 +46,21 @@ nlohmann::json Mat(const Eigen::Matrix3d& R) {
   return rows;
 }
 
-// `hgrasp model`, and with `plan` also `hgrasp plan`.
-int LookAndPlan(const ModelOptions& o, bool plan) {
-  const auto t0 = Clock::now();
-  const sim::Scenario scenario = sim::LoadScenario(o.scenario);
-  const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
-  const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
-  const auto head = robot::HeadKinematics::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
-  sim::SimRobot robot(scenario);
-  device::RobotDevices dev = MakeDevices(scenario, &robot);
-  scan::Scanner scanner(head, cameras, laser);
+}  // namespace
 
-  auto t = Clock::now();
-  const scan::ScanResult scan = scanner.Scan(dev, {});
-  const double scan_s = Seconds(t);
-  device::HeadState head_state;
-  dev.head->Read(&head_state);
-
-  t = Clock::now();
-  const model::SceneModel scene = model::ModelScene(scan.range);
-  const double model_s = Seconds(t);
-  const std::vector<model::BoxModel>& boxes = scene.boxes;
-  const std::vector<model::ColourSummary>& colours = scene.colours;
-
-  // The target: by colour, or by a name through its colour word.
-  std::optional<int> target;
-  std::string failure;
-  if (scenario.task) {
-    const std::optional<std::string_view> colour =
-        scenario.task->target_color.empty()
-            ? model::ColourOfName(scenario.task->target_name)
-            : std::optional<std::string_view>(scenario.task->target_color);
-    if (!colour) {
-      failure = "target name '" + scenario.task->target_name +
-                "' names no colour; the robot knows objects by their colour";
-    } else {
-      target = model::ChooseByColour(colours, *colour);
-      if (!target) failure = "no " + std::string(*colour) + " box found";
-    }
-  }
-  if (boxes.empty()) failure = "no box found";
-
-  // The grasp (paper 5.3): both arms, their kinematics from the URDF.
-  std::optional<grasp::GraspPlan> grasp_plan;
-  double plan_s = 0;
-  if (plan && failure.empty() && target) {
-    const auto tree = robot::KinematicTree::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
-    const auto left = robot::ArmKinematics::FromTree(tree, "left");
-    const auto right = robot::ArmKinematics::FromTree(tree, "right");
-    t = Clock::now();
-    grasp_plan = grasp::PlanGrasp(boxes, *target, {&left, &right});
-    plan_s = Seconds(t);
-    if (!grasp_plan) failure = "no reachable grasp of box " + std::to_string(*target);
-  }
-
+nlohmann::json LookReport(const sim::Scenario& scenario, sim::SimRobot* robot,
+                          const task::TaskResult& r, const task::RobotModel& robot_model, bool plan,
+                          const std::string& out_dir) {
   nlohmann::json report;
   report["scenario"] = scenario.name;
   report["seed"] = scenario.seed;
+  if (!r.scan) return report;
+  const scan::ScanResult& scan = *r.scan;
+  const model::SceneModel& scene = *r.scene;
+  const std::vector<model::BoxModel>& boxes = scene.boxes;
+  const std::vector<model::ColourSummary>& colours = scene.colours;
+  const std::optional<int>& target = r.target;
+  const std::optional<grasp::GraspPlan>& grasp_plan = r.plan;
   report["range"] = {{"points", scan.points}, {"rejected", scan.rejected}};
   nlohmann::json jboxes = nlohmann::json::array();
   for (const model::BoxModel& b : boxes) {
@@ -118,15 +74,8 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
                       {"points", b.points}});
   }
   report["boxes"] = jboxes;
-  report["ok"] = failure.empty();
-  report["failure"] = failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure);
   report["target"] = target ? nlohmann::json(*target) : nlohmann::json(nullptr);
-  report["timing_s"] = {{"scan", scan_s},
-                        {"segment", scene.segment_s},
-                        {"model", scene.model_s},
-                        {"total", Seconds(t0)}};
   if (plan) {
-    report["timing_s"]["plan"] = plan_s;
     if (grasp_plan) {
       const grasp::GraspPlan& g = *grasp_plan;
       nlohmann::json q = nlohmann::json::array(), q_pre = nlohmann::json::array(),
@@ -152,11 +101,11 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
 
   // Ground truth (only where the devices are the simulator's): each true object against the
   // fitted box nearest to it.
-  if (AllSimulated(scenario)) {
-    nlohmann::json truth = sim::TruthJson(robot.world(), robot.rig(), {});
+  if (robot != nullptr) {
+    nlohmann::json truth = sim::TruthJson(robot->world(), robot->rig(), {});
     nlohmann::json matches = nlohmann::json::array();
-    for (const sim::SimObject& obj : robot.world().objects()) {
-      const Pose3 X_WO = robot.world().BodyPose(obj.body);
+    for (const sim::SimObject& obj : robot->world().objects()) {
+      const Pose3 X_WO = robot->world().BodyPose(obj.body);
       int best = -1;
       double best_d = 1e9;
       for (size_t k = 0; k < boxes.size(); ++k) {
@@ -183,16 +132,9 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
     truth["boxes"] = matches;
     if (grasp_plan) {
       // How far each contact lies from the true surface of the object the target box models.
-      const sim::SimObject* object = nullptr;
-      double best_d = 1e9;
-      for (const sim::SimObject& obj : robot.world().objects()) {
-        const double d =
-            (robot.world().BodyPose(obj.body).translation() - boxes[*target].X_WO.translation())
-                .norm();
-        if (d < best_d) best_d = d, object = &obj;
-      }
+      const sim::SimObject* object = TargetObject(robot->world(), boxes[*target]);
       if (object != nullptr) {
-        const Pose3 X_WO = robot.world().BodyPose(object->body);
+        const Pose3 X_WO = robot->world().BodyPose(object->body);
         nlohmann::json d = nlohmann::json::array();
         for (const Eigen::Vector3d& c : grasp_plan->contacts_W) {
           d.push_back(sim::DistanceToBoxSurface(X_WO, object->spec.size_O, c));
@@ -205,11 +147,11 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
     report["truth"] = truth;
   }
 
-  fs::create_directories(o.out_dir);
-  const fs::path out(o.out_dir);
+  fs::create_directories(out_dir);
+  const fs::path out(out_dir);
   scan::WritePly(scan.range, (out / "range.ply").string());
   scan::WriteRangePng(scan.range, (out / "range.png").string());
-  const PinholeCamera camera = cameras.left;
+  const PinholeCamera camera = robot_model.cameras.left;
   WritePng(SegmentsPicture(scene.segments, scene.groups, scan.range, camera),
            (out / "segments.png").string());
   std::vector<cv::Vec3b> colours_bgr;
@@ -222,7 +164,7 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
     colours_rgb.push_back(colours[i].rgb);
     labels.push_back(std::to_string(i) + " " + std::string(colours[i].name()));
   }
-  const Pose3 X_CW = head.X_WC(0, head_state.q).inverse();
+  const Pose3 X_CW = robot_model.head.X_WC(0, r.scan_head).inverse();
   cv::Mat models = ModelsPicture(scan.ambient_left, camera, X_CW, boxes, scene.textures,
                                  colours_bgr, labels, target.value_or(-1));
   WritePng(models, (out / "models.png").string());
@@ -234,21 +176,70 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
     WritePng(models, (out / "grasp.png").string());
   }
   model::WriteObj(boxes, scene.textures, colours_rgb, out.string());
-  std::ofstream(out / "report.json") << report.dump(2) << "\n";
   spdlog::info(
       "model: {} points, {} regions, {} objects, {} boxes ({} not fitted), target {}; scan "
-      "{:.2f} s, segment + model {:.1f} ms, total {:.2f} s; wrote {}",
+      "{:.2f} s, segment + model {:.1f} ms",
       scan.points, scene.segments.regions.size(), scene.groups.objects.size(), boxes.size(),
-      scene.unfitted, target ? std::to_string(*target) : "none", scan_s, 1e3 * model_s, Seconds(t0),
-      o.out_dir);
+      scene.unfitted, target ? std::to_string(*target) : "none", r.stages[0].wall_s,
+      1e3 * (scene.segment_s + scene.model_s));
   if (grasp_plan) {
-    spdlog::info(
-        "plan: {} arm, opening {:.0f} mm, tilt {:.0f} deg, wrist-forearm {:.1f} deg; {:.2f} ms",
-        grasp_plan->side == device::Side::kLeft ? "left" : "right", 1e3 * grasp_plan->opening_m,
-        RadToDeg(grasp_plan->tilt_rad), RadToDeg(grasp_plan->comfort_rad), 1e3 * plan_s);
+    spdlog::info("plan: {} arm, opening {:.0f} mm, tilt {:.0f} deg, wrist-forearm {:.1f} deg",
+                 grasp_plan->side == device::Side::kLeft ? "left" : "right",
+                 1e3 * grasp_plan->opening_m, RadToDeg(grasp_plan->tilt_rad),
+                 RadToDeg(grasp_plan->comfort_rad));
   }
-  if (!failure.empty()) spdlog::warn("{}: {}", plan ? "plan" : "model", failure);
-  return failure.empty() ? 0 : 1;
+  return report;
+}
+
+const sim::SimObject* TargetObject(const sim::World& world, const model::BoxModel& box) {
+  const sim::SimObject* object = nullptr;
+  double best_d = 1e9;
+  for (const sim::SimObject& obj : world.objects()) {
+    const double d = (world.BodyPose(obj.body).translation() - box.X_WO.translation()).norm();
+    if (d < best_d) best_d = d, object = &obj;
+  }
+  return object;
+}
+
+task::TaskConfig TaskConfigFor(const sim::Scenario& scenario) {
+  task::TaskConfig config;
+  if (scenario.task) {
+    config.target_color = scenario.task->target_color;
+    config.target_name = scenario.task->target_name;
+    config.lift_m = scenario.task->lift_m;
+  }
+  return config;
+}
+
+namespace {
+
+// `hgrasp model`, and with `plan` also `hgrasp plan`: the task's first stages.
+int LookAndPlan(const ModelOptions& o, bool plan) {
+  const auto t0 = Clock::now();
+  const sim::Scenario scenario = sim::LoadScenario(o.scenario);
+  task::RobotModel robot_model = task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
+  sim::SimRobot robot(scenario);
+  device::RobotDevices dev = MakeDevices(scenario, &robot);
+  task::GraspTask task(&dev, robot_model, TaskConfigFor(scenario));
+  const bool ok = task.Look() && (!plan || task.Plan());
+  const task::TaskResult& r = task.result();
+  nlohmann::json report = LookReport(scenario, AllSimulated(scenario) ? &robot : nullptr, r,
+                                     robot_model, plan, o.out_dir);
+  report["ok"] = ok;
+  report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
+  nlohmann::json timing = {{"total", Seconds(t0)}};
+  if (r.scene) {
+    timing["scan"] = r.stages[0].wall_s - r.scene->segment_s - r.scene->model_s;
+    timing["segment"] = r.scene->segment_s;
+    timing["model"] = r.scene->model_s;
+  }
+  if (plan && r.stages.size() > 1) timing["plan"] = r.stages[1].wall_s;
+  report["timing_s"] = timing;
+  fs::create_directories(o.out_dir);
+  std::ofstream(fs::path(o.out_dir) / "report.json") << report.dump(2) << "\n";
+  spdlog::info("{}: total {:.2f} s; wrote {}", plan ? "plan" : "model", Seconds(t0), o.out_dir);
+  if (!ok) spdlog::warn("{}: {}", plan ? "plan" : "model", r.message);
+  return ok ? 0 : 1;
 }
 
 }  // namespace

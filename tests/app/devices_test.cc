@@ -95,9 +95,9 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
   EXPECT_TRUE(WaitFor([&] { return Ok(dev.laser->Read(&ls)) && !ls.moving; }, 3.0));
   EXPECT_EQ(ls.encoder_count, 300);
   EXPECT_TRUE(ls.laser_on);
-  EXPECT_EQ(dev.leds->Count(Side::kLeft), 6);
+  EXPECT_EQ(dev.leds->Count(Side::kLeft), 8);
   EXPECT_EQ(dev.leds->Set(Side::kLeft, 0b101), Status::kOk);
-  EXPECT_EQ(dev.leds->Set(Side::kLeft, 1u << 6), Status::kRejected);
+  EXPECT_EQ(dev.leds->Set(Side::kLeft, 1u << 8), Status::kRejected);
 
   device::Hand& right_hand = dev.HandOf(Side::kRight);
   ASSERT_EQ(right_hand.Open(0.06), Status::kOk);

@@ -1,0 +1,188 @@
+// `hgrasp run`: the whole task (task::GraspTask) on the devices the scenario names, with its
+// pictures, the left camera's video and the report; the simulator's ground truth added to the
+// report only when every device is simulated (never given to the pipeline).
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "app/commands.h"
+#include "app/devices.h"
+#include "app/look_report.h"
+#include "app/pictures.h"
+#include "sim/scenario.h"
+#include "sim/sim_devices.h"
+#include "sim/truth.h"
+#include "task/grasp_task.h"
+
+namespace hgrasp::app {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// The left image, kPictureScale times its size, with the planned grasp (red), the servo's
+// current target when it is another pose (the pre-grasp, orange) and the tracked hand (green)
+// as wireframes (after the paper's Figure 9), and the time and stage written in a corner.
+cv::Mat ServoPicture(const device::StereoFrame& frame, const task::TaskView& view,
+                     const PinholeCamera& camera) {
+  cv::Mat picture;
+  cv::resize(frame.left, picture, cv::Size(), kPictureScale, kPictureScale, cv::INTER_LINEAR);
+  // HandBoxes of a pose in CL are the hand's boxes in CL: drawn with X_CW the identity.
+  const Pose3 identity = Pose3::Identity();
+  if (view.X_CG) {
+    DrawHand(&picture, camera, identity, grasp::HandBoxes(*view.X_CG, view.opening_m, {}),
+             cv::Scalar(40, 40, 255));
+  }
+  if (view.X_CT && !(view.X_CG && view.X_CT->isApprox(*view.X_CG, 1e-9))) {
+    DrawHand(&picture, camera, identity, grasp::HandBoxes(*view.X_CT, view.opening_m, {}),
+             cv::Scalar(0, 160, 255));
+  }
+  if (view.X_CE) {
+    DrawHand(&picture, camera, identity, grasp::HandBoxes(*view.X_CE, view.opening_m, {}),
+             cv::Scalar(60, 220, 60));
+  }
+  char text[96];
+  std::snprintf(text, sizeof text, "t %.2f s  %s%s%s", frame.t_s, std::string(view.stage).c_str(),
+                view.moment.empty() ? "" : ": ", std::string(view.moment).c_str());
+  cv::putText(picture, text, cv::Point(8, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return picture;
+}
+
+nlohmann::json ErrorJson(const servo::ServoError& e) {
+  return {{"translation_m", e.translation_m}, {"rotation_deg", RadToDeg(e.rotation_rad)}};
+}
+
+}  // namespace
+
+int Run(const RunOptions& o) {
+  const auto t0 = Clock::now();
+  const sim::Scenario scenario = sim::LoadScenario(o.scenario);
+  const task::RobotModel robot_model =
+      task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
+  sim::SimRobot robot(scenario);
+  device::RobotDevices dev = MakeDevices(scenario, &robot);
+  const bool sim_truth = AllSimulated(scenario);
+  fs::create_directories(o.out_dir);
+  const fs::path out(o.out_dir);
+
+  cv::VideoWriter video;
+  if (o.video) {
+    // Motion JPEG in AVI: OpenCV's own encoder, no codec library needed.
+    const cv::Size size(kPictureScale * 320, kPictureScale * 240);
+    if (!video.open((out / "left.avi").string(), cv::CAP_OPENCV_MJPEG,
+                    cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25.0, size)) {
+      spdlog::warn("run: cannot write {}; no video", (out / "left.avi").string());
+    }
+    video.set(cv::VIDEOWRITER_PROP_QUALITY, 75);
+  }
+  nlohmann::json truth_run = nlohmann::json::object();
+  task::GraspTask* task_ptr = nullptr;
+  int pictures = 0;
+  auto sink = [&](const device::StereoFrame& frame, const task::TaskView& view) {
+    const bool key = !view.moment.empty();
+    if (!key && !video.isOpened()) return;
+    const cv::Mat picture = ServoPicture(frame, view, robot_model.cameras.left);
+    if (!key) {
+      video.write(picture);
+      return;
+    }
+    WritePng(picture, (out / ("servo_" + std::string(view.moment) + ".png")).string());
+    ++pictures;
+    if (sim_truth && task_ptr->result().plan && view.moment != "lifted") {
+      // Where the gripper truly is against the planned pose it is servoed to: the pre-grasp
+      // until it is reached, then the grasp.
+      const Pose3 X_WCL = robot_model.head.X_WC(robot::HeadKinematics::kLeft, frame.head);
+      const grasp::GraspPlan& plan = *task_ptr->result().plan;
+      const Pose3& X_WT = view.moment == "grasp_reached" ? plan.X_WE : plan.X_WE_pre;
+      const sim::PoseError e = sim::GripperPoseError(robot.world(), plan.side, X_WCL, X_WT);
+      truth_run[std::string(view.moment)] = {{"gripper_to_plan_m", e.translation_m},
+                                             {"gripper_to_plan_deg", RadToDeg(e.rotation_rad)}};
+    }
+  };
+  task::GraspTask task(&dev, robot_model, TaskConfigFor(scenario), sink);
+  task_ptr = &task;
+  // The target object's true height before anything touches it (truth only).
+  std::optional<double> z0;
+  const bool ok = task.Look() && [&] {
+    if (sim_truth && task.result().target) {
+      const sim::SimObject* object =
+          TargetObject(robot.world(), task.result().scene->boxes[*task.result().target]);
+      if (object != nullptr) z0 = robot.world().BodyPose(object->body).translation().z();
+    }
+    return task.Plan() && task.Approach() && task.Servo() && task.Close() && task.Lift();
+  }();
+  const task::TaskResult& r = task.result();
+
+  nlohmann::json report =
+      LookReport(scenario, sim_truth ? &robot : nullptr, r, robot_model, true, o.out_dir);
+  report["ok"] = ok;
+  report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
+  report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
+  report["result"] = {{"lifted", r.lifted}, {"lift_height", r.lift_height_m}};
+  nlohmann::json phases = nlohmann::json::array();
+  for (const task::ServoPhase& p : r.servo) {
+    phases.push_back({{"phase", p.name},
+                      {"iterations", p.iterations},
+                      {"converged", p.converged},
+                      {"final_error_by_filter", ErrorJson(p.final_error)},
+                      {"device_s", p.sim_s}});
+  }
+  report["servo"] = {{"phases", phases},
+                     {"recoveries", r.recoveries},
+                     {"flashes", r.flashes},
+                     {"measurements", r.measurements},
+                     {"image_measurements", r.image_measurements},
+                     {"head_moves", r.head_moves},
+                     {"held_opening_m", r.held_opening_m}};
+  nlohmann::json timing = nlohmann::json::object();
+  nlohmann::json stages = nlohmann::json::array();
+  for (const task::StageTiming& s : r.stages) {
+    timing[s.name] = s.wall_s;
+    stages.push_back(
+        {{"stage", s.name}, {"wall_s", s.wall_s}, {"device_s", s.device_s}, {"frames", s.frames}});
+  }
+  if (r.scene) {
+    timing["scan"] = timing["look"].get<double>() - r.scene->segment_s - r.scene->model_s;
+    timing["segment"] = r.scene->segment_s;
+    timing["model"] = r.scene->model_s;
+  }
+  timing["total"] = Seconds(t0);
+  report["timing_s"] = timing;
+  // Simulated (device) time against wall time, per stage and for the whole task.
+  report["stages"] = stages;
+  report["device_time_s"] = r.device_s;
+  report["wall_time_s"] = r.wall_s;
+  if (sim_truth) {
+    if (z0 && r.target) {
+      const sim::SimObject* object = TargetObject(robot.world(), r.scene->boxes[*r.target]);
+      const double rise = robot.world().BodyPose(object->body).translation().z() - *z0;
+      truth_run["object"] = object->spec.name;
+      truth_run["object_rise_m"] = rise;
+    }
+    report["truth"]["run"] = truth_run;
+  }
+  std::ofstream(out / "report.json") << report.dump(2) << "\n";
+
+  std::string servo;
+  for (const task::ServoPhase& p : r.servo) {
+    servo += fmt::format(" {} {} iterations, {:.1f} mm {:.2f} deg;", p.name, p.iterations,
+                         1e3 * p.final_error.translation_m, RadToDeg(p.final_error.rotation_rad));
+  }
+  spdlog::info(
+      "run: {}; servo:{} lift {:.1f} mm; device time {:.1f} s, wall {:.1f} s ({:.2f}x real "
+      "time); {} pictures; wrote {}",
+      ok ? "lifted" : std::string(task::ToString(r.failure)), servo, 1e3 * r.lift_height_m,
+      r.device_s, Seconds(t0), r.device_s > 0 ? r.device_s / Seconds(t0) : 0.0, pictures,
+      o.out_dir);
+  if (!ok) spdlog::warn("run: {}: {}", task::ToString(r.failure), r.message);
+  return ok ? 0 : 1;
+}
+
+}  // namespace hgrasp::app

@@ -1,0 +1,456 @@
+#include "task/grasp_task.h"
+
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "common/paths.h"
+#include "model/colour.h"
+#include "robot/kinematic_tree.h"
+
+namespace hgrasp::task {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr int kCL = robot::HeadKinematics::kLeft;
+
+double Since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+std::string_view ToString(Failure f) {
+  switch (f) {
+    case Failure::kNone:
+      return "";
+    case Failure::kNoTarget:
+      return "no_target";
+    case Failure::kUnreachable:
+      return "unreachable";
+    case Failure::kTrackingLost:
+      return "tracking_lost";
+    case Failure::kServoTimeout:
+      return "servo_timeout";
+    case Failure::kGraspSlipped:
+      return "grasp_slipped";
+    case Failure::kDeviceError:
+      return "device_error";
+  }
+  return "unknown";
+}
+
+TaskConfig::TaskConfig() {
+  // Re-centre the gripper only when it strays well off the axis: each head move costs device
+  // time, and the target and the filter have to be carried through it.
+  head.deadband = DegToRad(8.0);
+  head.max_step = DegToRad(20.0);
+  // Stop well inside the 5 mm / 2 deg the grasp must reach: the filter's pose is what stops
+  // the servo, and it is itself off by a millimetre or two and a degree (see fine_iterations).
+  law.translation_tolerance = 0.001;
+  law.rotation_tolerance = DegToRad(1.0);
+}
+
+RobotModel LoadRobotModel(const std::string& cameras_path, const std::string& laser_path,
+                          const std::string& leds_path) {
+  const std::string urdf = ResolveDataPath("models/humanoid.urdf");
+  const auto tree = robot::KinematicTree::FromUrdfFile(urdf);
+  return RobotModel{
+      robot::LoadStereoIntrinsics(ResolveDataPath(cameras_path)),
+      robot::LoadLaserCalibration(ResolveDataPath(laser_path)),
+      robot::HeadKinematics::FromUrdfFile(urdf),
+      {robot::ArmKinematics::FromTree(tree, "left"), robot::ArmKinematics::FromTree(tree, "right")},
+      servo::LoadLedLayouts(ResolveDataPath(leds_path))};
+}
+
+// The cameras as the task sees them: each frame grabbed (by the scanner, the tracker or the
+// task) is also given to the task, which keeps it and passes it to the sink.
+class GraspTask::SinkCamera final : public device::StereoCamera {
+ public:
+  SinkCamera(std::unique_ptr<device::StereoCamera> inner, GraspTask* task)
+      : inner_(std::move(inner)), task_(task) {}
+
+  device::Status Grab(device::StereoFrame* frame) override {
+    const device::Status s = inner_->Grab(frame);
+    if (s == device::Status::kOk) task_->OnFrame(*frame);
+    return s;
+  }
+
+  std::unique_ptr<device::StereoCamera> Release() { return std::move(inner_); }
+
+ private:
+  std::unique_ptr<device::StereoCamera> inner_;
+  GraspTask* task_;
+};
+
+GraspTask::GraspTask(device::RobotDevices* dev, RobotModel model, TaskConfig config, FrameSink sink)
+    : dev_(dev),
+      model_(std::move(model)),
+      config_(std::move(config)),
+      sink_(std::move(sink)),
+      head_tracker_(model_.head, config_.head) {
+  servo::ValidateControlLawOptions(config_.law);
+  auto camera = std::make_unique<SinkCamera>(std::move(dev_->cameras), this);
+  camera_ = camera.get();
+  dev_->cameras = std::move(camera);
+}
+
+GraspTask::~GraspTask() { dev_->cameras = camera_->Release(); }
+
+void GraspTask::OnFrame(const device::StereoFrame& frame) {
+  if (!have_frame_) first_t_s_ = frame.t_s;
+  last_frame_ = frame;
+  have_frame_ = true;
+  ++frames_;
+  if (sink_) sink_(frame, View(""));
+}
+
+TaskView GraspTask::View(std::string_view moment) const {
+  TaskView v;
+  v.stage = stage_;
+  v.moment = moment;
+  if (result_.plan) v.side = result_.plan->side;
+  if (tracker_ && tracker_->tracking()) v.X_CE = tracker_->pose();
+  v.X_CT = X_CT_;
+  if (result_.plan && have_frame_) {
+    v.X_CG = model_.head.X_WC(kCL, last_frame_.head).inverse() * result_.plan->X_WE;
+  }
+  v.opening_m = opening_m_;
+  return v;
+}
+
+void GraspTask::Moment(std::string_view moment) {
+  if (sink_ && have_frame_) sink_(last_frame_, View(moment));
+}
+
+void GraspTask::BeginStage(std::string_view name) {
+  if (result_.stages.empty()) task_wall_ = Clock::now();
+  stage_ = name;
+  stage_wall_ = Clock::now();
+  stage_device_s_ = have_frame_ ? last_frame_.t_s : 0.0;
+  stage_frames_ = frames_;
+  stage_started_with_frame_ = have_frame_;
+}
+
+void GraspTask::EndStage() {
+  StageTiming t;
+  t.name = std::string(stage_);
+  t.wall_s = Since(stage_wall_);
+  t.frames = static_cast<int>(frames_ - stage_frames_);
+  if (have_frame_) {
+    // The first stage starts at its first frame's exposure (the device clock's zero is not ours).
+    t.device_s = last_frame_.t_s - (stage_started_with_frame_ ? stage_device_s_ : first_t_s_);
+  }
+  result_.stages.push_back(t);
+  result_.wall_s = Since(task_wall_);
+  result_.device_s = have_frame_ ? last_frame_.t_s - first_t_s_ : 0.0;
+}
+
+bool GraspTask::Fail(Failure f, std::string message) {
+  result_.failure = f;
+  result_.message = std::move(message);
+  if (tracker_) {
+    result_.flashes = tracker_->flashes();
+    result_.recoveries = tracker_->recoveries();
+    result_.measurements = tracker_->measurements();
+    result_.image_measurements = tracker_->image_measurements();
+  }
+  EndStage();
+  return false;
+}
+
+bool GraspTask::DeviceOk(device::Status s, std::string_view what) {
+  if (s == device::Status::kOk) return true;
+  return Fail(Failure::kDeviceError, std::string(what) + ": " + std::string(device::ToString(s)));
+}
+
+bool GraspTask::GrabFrame(bool track) {
+  device::StereoFrame frame;
+  if (!DeviceOk(dev_->cameras->Grab(&frame), "camera grab")) return false;
+  return !track || TrackFrame(frame);
+}
+
+bool GraspTask::WaitUntil(const std::function<bool()>& done, std::string_view what, bool track) {
+  const double t0 = have_frame_ ? last_frame_.t_s : 0.0;
+  for (;;) {
+    if (!GrabFrame(track)) return false;
+    if (done()) return true;
+    if (last_frame_.t_s - t0 > config_.move_timeout_s) {
+      return Fail(Failure::kDeviceError, std::string(what) + " did not end within " +
+                                             std::to_string(config_.move_timeout_s) + " s");
+    }
+  }
+}
+
+bool GraspTask::ArmStill() {
+  device::ArmState s;
+  return dev_->ArmOf(result_.plan->side).Read(&s) == device::Status::kOk && !s.moving;
+}
+
+bool GraspTask::HandStill() {
+  device::HandState s;
+  return dev_->HandOf(result_.plan->side).Read(&s) == device::Status::kOk && !s.moving;
+}
+
+bool GraspTask::HeadStill() {
+  device::HeadState s;
+  return dev_->head->Read(&s) == device::Status::kOk && !s.moving;
+}
+
+bool GraspTask::TrackFrame(const device::StereoFrame& frame) {
+  if (!tracker_ || (!tracker_->tracking() && !tracker_->lost())) return true;
+  const servo::TrackerStatus s = tracker_->Track(frame);
+  if (s == servo::TrackerStatus::kLost) return Recover();
+  return true;
+}
+
+bool GraspTask::Recover() {
+  const double t0 = last_frame_.t_s;
+  for (;;) {
+    const servo::TrackerStatus s = tracker_->Initialise(*dev_->leds, *dev_->cameras);
+    if (s == servo::TrackerStatus::kOk) return true;
+    if (s == servo::TrackerStatus::kDeviceError) {
+      return DeviceOk(tracker_->device_status(), "LEDs or cameras while flashing");
+    }
+    if (last_frame_.t_s - t0 > config_.recovery_s) {
+      return Fail(Failure::kTrackingLost, "the gripper's LEDs were not found again in " +
+                                              std::to_string(config_.recovery_s) +
+                                              " s of flashing");
+    }
+  }
+}
+
+bool GraspTask::AimHead(const Eigen::Vector3d& p_C, bool* moved) {
+  *moved = false;
+  const device::HeadJoints q_old = last_frame_.head;  // the joints p_C was measured at
+  const servo::HeadTrackingResult aim = head_tracker_.Track(q_old, p_C);
+  if (!aim.moved) return true;
+  if (!DeviceOk(dev_->head->MoveTo(aim.q), "head move")) return false;
+  // The cameras move: no gripper measurement until they are still again, and then a few
+  // frames more while the axes settle on their set-points.
+  if (!WaitUntil([this] { return HeadStill(); }, "head move", /*track=*/false)) return false;
+  for (int k = 0; k < config_.settle_frames; ++k) {
+    if (!GrabFrame(false)) return false;
+  }
+  // The filter carried into the new camera frame by the head kinematics (the joints latched
+  // with the frames); the target follows from the same kinematics at every iteration.
+  tracker_->CarryThroughCameraMove(head_tracker_.X_CnewC(q_old, last_frame_.head));
+  ++result_.head_moves;
+  *moved = true;
+  return true;
+}
+
+device::Status GraspTask::MoveRelative(device::Arm& arm, const Pose3& X_EEnew) {
+  // The controller refuses a move whose end it cannot solve for (near a wrist singularity, its
+  // local solver may not converge): try the same direction, shorter, before giving up.
+  Pose3 step = X_EEnew;
+  device::Status s = device::Status::kRejected;
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    s = arm.MoveRelative(step);
+    if (s != device::Status::kRejected) return s;
+    const Eigen::AngleAxisd turn(step.linear());
+    step.linear() = Eigen::AngleAxisd(0.5 * turn.angle(), turn.axis()).toRotationMatrix();
+    step.translation() *= 0.5;
+  }
+  return s;
+}
+
+bool GraspTask::Look() {
+  BeginStage("look");
+  device::HeadState head;
+  if (!DeviceOk(dev_->head->Read(&head), "head read")) return false;
+  result_.scan_head = head.q;
+  scan::Scanner scanner(model_.head, model_.cameras, model_.laser);
+  result_.scan = scanner.Scan(*dev_, config_.sweep);
+  result_.scene = model::ModelScene(result_.scan->range, config_.model);
+  const std::optional<std::string_view> colour =
+      config_.target_color.empty() ? model::ColourOfName(config_.target_name)
+                                   : std::optional<std::string_view>(config_.target_color);
+  if (!colour) {
+    return Fail(Failure::kNoTarget, "target name '" + config_.target_name +
+                                        "' names no colour; the robot knows objects by colour");
+  }
+  if (result_.scene->boxes.empty()) return Fail(Failure::kNoTarget, "no box found");
+  result_.target = model::ChooseByColour(result_.scene->colours, *colour);
+  if (!result_.target) return Fail(Failure::kNoTarget, "no " + std::string(*colour) + " box found");
+  EndStage();
+  return true;
+}
+
+bool GraspTask::Plan() {
+  BeginStage("plan");
+  const auto& arms = model_.arms;
+  result_.plan =
+      grasp::PlanGrasp(result_.scene->boxes, *result_.target, {&arms[0], &arms[1]}, config_.grasp);
+  if (!result_.plan) {
+    return Fail(Failure::kUnreachable,
+                "no reachable grasp of box " + std::to_string(*result_.target));
+  }
+  EndStage();
+  return true;
+}
+
+bool GraspTask::Approach() {
+  BeginStage("approach");
+  const grasp::GraspPlan& plan = *result_.plan;
+  device::Arm& arm = dev_->ArmOf(plan.side);
+  opening_m_ = plan.opening_m;
+  if (!DeviceOk(dev_->HandOf(plan.side).Open(plan.opening_m), "hand open")) return false;
+  // Above the pre-grasp first, then down to it: the hand comes onto the box from above.
+  for (const device::Joint6* q : {&plan.q_via, &plan.q_pre}) {
+    if (!DeviceOk(arm.MoveJoints(*q), "arm move")) return false;
+    if (!WaitUntil([this] { return ArmStill() && HandStill(); }, "arm move", false)) return false;
+  }
+  tracker_.emplace(plan.side, model_.leds.Of(plan.side), model_.cameras, model_.head,
+                   config_.tracker);
+  EndStage();
+  return true;
+}
+
+bool GraspTask::ServoTo(const Pose3& X_WT, std::string name, std::string_view reached) {
+  ServoPhase phase;
+  phase.name = std::move(name);
+  const double t0 = last_frame_.t_s;
+  device::Arm& arm = dev_->ArmOf(result_.plan->side);
+  for (;;) {
+    // The arm is still: let the filter settle on it.
+    for (int k = 0; k < config_.settle_frames; ++k) {
+      if (!GrabFrame(true)) return false;
+    }
+    // The target held relative to the cameras: carried through any head motion by the head
+    // kinematics at the joints latched with the frame (X_C'T = X_C'C X_CT = X_WC'^-1 X_WT).
+    X_CT_ = model_.head.X_WC(kCL, last_frame_.head).inverse() * X_WT;
+    const servo::ServoCommand cmd =
+        servo::ComputeServoCommand(tracker_->pose(), *X_CT_, config_.law);
+    phase.final_error = cmd.error;
+    // Within the law's tolerance; or, after fine_iterations, within the coarse one (the arm's
+    // smallest moves and the filter's noise can keep the error from ever settling in the fine).
+    const bool coarse = phase.iterations >= config_.fine_iterations &&
+                        cmd.error.translation_m <= config_.coarse_translation_tolerance_m &&
+                        cmd.error.rotation_rad <= config_.law.rotation_tolerance;
+    if (cmd.converged || coarse) {
+      phase.converged = true;
+      break;
+    }
+    if (phase.iterations >= config_.max_iterations) {
+      phase.sim_s = last_frame_.t_s - t0;
+      result_.servo.push_back(phase);
+      return Fail(Failure::kServoTimeout, "servo to the " + phase.name + " did not converge in " +
+                                              std::to_string(config_.max_iterations) +
+                                              " iterations");
+    }
+    // Keep the gripper in view; after a head move, measure again before commanding.
+    bool moved = false;
+    if (!AimHead(tracker_->pose().translation(), &moved)) return false;
+    if (moved) continue;
+    const device::Status s = MoveRelative(arm, cmd.X_EEnew);
+    if (s == device::Status::kRejected) {
+      return Fail(Failure::kUnreachable,
+                  "the arm refused the servo move towards the " + phase.name + " (out of reach)");
+    }
+    if (!DeviceOk(s, "arm move")) return false;
+    ++phase.iterations;
+    if (!WaitUntil([this] { return ArmStill(); }, "arm move", true)) return false;
+  }
+  phase.sim_s = last_frame_.t_s - t0;
+  result_.servo.push_back(phase);
+  Moment(reached);
+  return true;
+}
+
+bool GraspTask::Servo() {
+  BeginStage("servo");
+  const grasp::GraspPlan& plan = *result_.plan;
+  // Find the gripper and identify its LEDs by flashing them (paper section 6).
+  const servo::TrackerStatus s = tracker_->Initialise(*dev_->leds, *dev_->cameras);
+  if (s == servo::TrackerStatus::kDeviceError) {
+    return DeviceOk(tracker_->device_status(), "LEDs or cameras while flashing");
+  }
+  if (s != servo::TrackerStatus::kOk && !Recover()) return false;
+  // Look at the gripper and the grasp together.
+  const Pose3 X_CW = model_.head.X_WC(kCL, last_frame_.head).inverse();
+  const Eigen::Vector3d between =
+      0.5 * (tracker_->pose().translation() + X_CW * plan.X_WE.translation());
+  bool moved = false;
+  if (!AimHead(between, &moved)) return false;
+  X_CT_ = model_.head.X_WC(kCL, last_frame_.head).inverse() * plan.X_WE_pre;
+  Moment("servo_start");
+  if (!ServoTo(plan.X_WE_pre, "pregrasp", "pregrasp_reached")) return false;
+  if (!ServoTo(plan.X_WE, "grasp", "grasp_reached")) return false;
+  EndStage();
+  return true;
+}
+
+bool GraspTask::Close() {
+  BeginStage("close");
+  const device::Side side = result_.plan->side;
+  if (!DeviceOk(dev_->HandOf(side).Close(config_.grip_force_n), "hand close")) return false;
+  if (!WaitUntil([this] { return HandStill(); }, "hand close", true)) return false;
+  device::HandState hand;
+  if (!DeviceOk(dev_->HandOf(side).Read(&hand), "hand read")) return false;
+  result_.held_opening_m = hand.opening_m;
+  opening_m_ = hand.opening_m;
+  if (hand.opening_m < config_.min_held_opening_m) {
+    return Fail(Failure::kGraspSlipped, "the fingers closed on nothing (opening " +
+                                            std::to_string(1e3 * hand.opening_m) + " mm)");
+  }
+  EndStage();
+  return true;
+}
+
+bool GraspTask::Lift() {
+  BeginStage("lift");
+  const device::Side side = result_.plan->side;
+  // Straight up in W, expressed in the gripper frame for the arm's relative move.
+  Pose3 X_WC = model_.head.X_WC(kCL, last_frame_.head);
+  const bool tracking = tracker_->tracking();
+  const Pose3 X_WE = tracking ? X_WC * tracker_->pose() : result_.plan->X_WE;
+  const double z0 = X_WE.translation().z();
+  Pose3 up = Pose3::Identity();
+  up.translation() = X_WE.linear().transpose() * Eigen::Vector3d(0, 0, config_.lift_m);
+  // In steps of at most a servo step, each as far as the controller accepts.
+  const int steps = static_cast<int>(std::ceil(config_.lift_m / config_.law.max_translation_step));
+  for (int k = 0; k < steps; ++k) {
+    Pose3 step = Pose3::Identity();
+    step.translation() = up.translation() / steps;
+    const device::Status s = MoveRelative(dev_->ArmOf(side), step);
+    if (s == device::Status::kRejected) {
+      return Fail(Failure::kUnreachable, "the arm refused the lift (out of reach)");
+    }
+    if (!DeviceOk(s, "arm move")) return false;
+    if (!WaitUntil([this] { return ArmStill(); }, "lift", true)) return false;
+  }
+  // Hold it up.
+  const double t_up = last_frame_.t_s;
+  while (last_frame_.t_s - t_up < config_.hold_s) {
+    if (!GrabFrame(true)) return false;
+  }
+  if (tracker_->tracking()) {
+    X_WC = model_.head.X_WC(kCL, last_frame_.head);
+    result_.lift_height_m = (X_WC * tracker_->pose()).translation().z() - z0;
+  }
+  device::HandState hand;
+  if (!DeviceOk(dev_->HandOf(side).Read(&hand), "hand read")) return false;
+  result_.held_opening_m = hand.opening_m;
+  Moment("lifted");
+  if (hand.opening_m < config_.min_held_opening_m) {
+    return Fail(Failure::kGraspSlipped, "the box slipped out of the hand while held up");
+  }
+  result_.lifted = true;
+  result_.flashes = tracker_->flashes();
+  result_.recoveries = tracker_->recoveries();
+  result_.measurements = tracker_->measurements();
+  result_.image_measurements = tracker_->image_measurements();
+  EndStage();
+  return true;
+}
+
+const TaskResult& GraspTask::Run() {
+  for (bool (GraspTask::*stage)() : {&GraspTask::Look, &GraspTask::Plan, &GraspTask::Approach,
+                                     &GraspTask::Servo, &GraspTask::Close, &GraspTask::Lift}) {
+    if (!(this->*stage)()) break;
+  }
+  return result_;
+}
+
+}  // namespace hgrasp::task

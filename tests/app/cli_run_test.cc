@@ -1,0 +1,92 @@
+// `hgrasp run` as a user runs it: the default scenario is grasped and lifted, with every output
+// the README names (the pictures of the key moments, the left camera's video, the report with
+// the result, the servo's figures and timings); a target the robot cannot see exits 1 naming
+// the failure.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+#include <string>
+
+#include "tests/app/cli_util.h"
+
+namespace {
+
+using hgrasp::testing::RunHgrasp;
+namespace fs = std::filesystem;
+
+fs::path FreshOutDir(const std::string& name) {
+  const auto dir = fs::temp_directory_path() / ("hgrasp_cli_run_" + name);
+  fs::remove_all(dir);
+  return dir;
+}
+
+TEST(CliRunTest, DefaultScenarioIsGraspedAndLifted) {
+  const auto out = FreshOutDir("default");
+  const auto r = RunHgrasp("run " + std::string(HGRASP_ROOT_DIR) +
+                           "/scenarios/default.yaml --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* file : {"range.ply", "range.png", "segments.png", "models.png", "grasp.png",
+                           "report.json", "servo_servo_start.png", "servo_pregrasp_reached.png",
+                           "servo_grasp_reached.png", "servo_lifted.png", "left.avi"}) {
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+  }
+  const cv::Mat picture = cv::imread((out / "servo_grasp_reached.png").string());
+  EXPECT_EQ(picture.cols, 640);
+  EXPECT_EQ(picture.rows, 480);
+  // The video holds every frame of the run (25 frames per simulated second).
+  cv::VideoCapture video((out / "left.avi").string());
+  ASSERT_TRUE(video.isOpened());
+  const double frames = video.get(cv::CAP_PROP_FRAME_COUNT);
+
+  std::ifstream in(out / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_TRUE(report["ok"].get<bool>());
+  EXPECT_TRUE(report["failure"].is_null());
+  EXPECT_TRUE(report["result"]["lifted"].get<bool>());
+  EXPECT_NEAR(report["result"]["lift_height"].get<double>(), 0.05, 0.01);
+  EXPECT_TRUE(report["grasp"]["arm"] == "left" || report["grasp"]["arm"] == "right");
+  ASSERT_EQ(report["servo"]["phases"].size(), 2u);
+  for (const auto& phase : report["servo"]["phases"]) {
+    EXPECT_TRUE(phase["converged"].get<bool>());
+    EXPECT_LE(phase["final_error_by_filter"]["translation_m"].get<double>(), 0.005);
+    EXPECT_LE(phase["final_error_by_filter"]["rotation_deg"].get<double>(), 2.0);
+  }
+  for (const char* key :
+       {"scan", "segment", "model", "plan", "approach", "servo", "close", "lift", "total"}) {
+    EXPECT_TRUE(report["timing_s"].contains(key)) << key;
+  }
+  const double device_s = report["device_time_s"].get<double>();
+  EXPECT_GT(device_s, 10.0);
+  EXPECT_NEAR(frames, device_s / 0.04 + 1, 3);
+  EXPECT_GT(report["wall_time_s"].get<double>(), 0.0);
+  // Truth (sim only): the gripper reached the planned grasp, and the box rose with it.
+  EXPECT_LE(report["truth"]["run"]["grasp_reached"]["gripper_to_plan_m"].get<double>(), 0.005);
+  EXPECT_LE(report["truth"]["run"]["grasp_reached"]["gripper_to_plan_deg"].get<double>(), 2.0);
+  EXPECT_NEAR(report["truth"]["run"]["object_rise_m"].get<double>(), 0.05, 0.005);
+}
+
+TEST(CliRunTest, AbsentTargetExitsOneNamingTheFailure) {
+  const auto out = FreshOutDir("absent");
+  const std::string scenario = (fs::temp_directory_path() / "hgrasp_run_absent.yaml").string();
+  std::ofstream(scenario) << R"(name: absent
+objects:
+  - {name: blue_box, shape: box, size: [0.08, 0.05, 0.07], position: [0.28, -0.09], color: [0.15, 0.30, 0.85]}
+task: {target: {color: green}, lift: 0.05}
+)";
+  const auto r = RunHgrasp("run " + scenario + " --no-video --out " + out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  std::ifstream in(out / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_FALSE(report["ok"].get<bool>());
+  EXPECT_EQ(report["failure"], "no_target");
+  EXPECT_EQ(report["failure_detail"], "no green box found");
+  EXPECT_FALSE(report["result"]["lifted"].get<bool>());
+  EXPECT_FALSE(fs::exists(out / "left.avi"));
+}
+
+}  // namespace

@@ -1,0 +1,111 @@
+// The whole task in the simulator (issue 7), judged against ground truth.
+
+#include <gtest/gtest.h>
+
+#include "common/paths.h"
+#include "sim/random_scene.h"
+#include "tests/task/task_sim_util.h"
+
+namespace hgrasp::task {
+namespace {
+
+using testing::Print;
+using testing::RunInSim;
+
+TEST(GraspTaskSim, DefaultScenarioIsGraspedAndTheSameSeedGivesTheSameRun) {
+  const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  const testing::SimOutcome a = RunInSim(scenario);
+  Print("default", a);
+  EXPECT_TRUE(a.Success()) << a.result.message;
+  EXPECT_GT(a.result.lift_height_m, 0.8 * scenario.task->lift_m);
+  EXPECT_LT(a.result.lift_height_m, 1.2 * scenario.task->lift_m);
+  // Deterministic: the same scenario and seed give the same figures (timings aside).
+  const testing::SimOutcome b = RunInSim(scenario);
+  ASSERT_EQ(a.result.servo.size(), b.result.servo.size());
+  for (std::size_t i = 0; i < a.result.servo.size(); ++i) {
+    EXPECT_EQ(a.result.servo[i].iterations, b.result.servo[i].iterations);
+    EXPECT_EQ(a.result.servo[i].final_error.translation_m,
+              b.result.servo[i].final_error.translation_m);
+    EXPECT_EQ(a.result.servo[i].final_error.rotation_rad,
+              b.result.servo[i].final_error.rotation_rad);
+  }
+  EXPECT_EQ(a.result.lift_height_m, b.result.lift_height_m);
+  EXPECT_EQ(a.result.device_s, b.result.device_s);
+  EXPECT_EQ(a.result.measurements, b.result.measurements);
+  EXPECT_EQ(a.rise_m, b.rise_m);
+}
+
+// The paper's claim: no camera-to-arm calibration. The head is really mounted 2 cm and 3 deg
+// away from where the kinematics (URDF) put it; the open-loop approach misses the pre-grasp by
+// centimetres, and the servo still brings the hand onto the planned grasp.
+TEST(GraspTaskSim, NoHandEyeCalibrationNeeded) {
+  const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  sim::WorldOptions options;
+  options.head_mount_error.linear() =
+      Eigen::AngleAxisd(DegToRad(3.0), Eigen::Vector3d(1, -1, 1).normalized()).toRotationMatrix();
+  options.head_mount_error.translation() = 0.02 * Eigen::Vector3d(1, 1, -1).normalized();
+  const testing::SimOutcome o = RunInSim(scenario, options);
+  Print("head mount 2 cm / 3 deg", o);
+  std::printf("open-loop approach off the pre-grasp by %.1f mm %.2f deg\n",
+              1e3 * o.after_approach.translation_m, RadToDeg(o.after_approach.rotation_rad));
+  EXPECT_GT(o.after_approach.translation_m, 0.01);  // what calibration error alone does
+  EXPECT_TRUE(o.Success()) << o.result.message;
+  EXPECT_GT(o.result.servo.at(0).iterations, 0);  // the servo did the work
+}
+
+// The LEDs are hidden for 1 s in the middle of the servo: tracking is lost, the LEDs are found
+// again by flashing, and the grasp goes on.
+TEST(GraspTaskSim, RecoversFromHiddenLeds) {
+  const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  bool hidden = false;
+  double hidden_at = 0;
+  const testing::SimOutcome o =
+      RunInSim(scenario, {},
+               [&](const device::StereoFrame& frame, const TaskView& view, sim::SimRobot& robot) {
+                 if (!hidden && view.moment == "pregrasp_reached") {
+                   hidden = true;
+                   hidden_at = frame.t_s + 0.1;
+                   robot.world().HideLeds(hidden_at, hidden_at + 1.0);
+                 }
+               });
+  Print("LEDs hidden 1 s", o);
+  ASSERT_TRUE(hidden);
+  EXPECT_GE(o.result.recoveries, 1);
+  EXPECT_TRUE(o.Success()) << o.result.message;
+}
+
+TEST(GraspTaskSim, AbsentTargetIsNoTarget) {
+  sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  scenario.task->target_color = "green";
+  const testing::SimOutcome o = RunInSim(scenario);
+  EXPECT_EQ(o.result.failure, Failure::kNoTarget);
+  EXPECT_EQ(o.result.message, "no green box found");
+  EXPECT_FALSE(o.result.plan.has_value());
+  EXPECT_EQ(ToString(o.result.failure), "no_target");
+}
+
+// Issue 7's acceptance: over 20 seeded random scenes whose target the open hand can span, the
+// servo brings the gripper within 5 mm and 2 deg of the planned grasp and the box comes up by
+// task.lift and stays up for 2 s, in at least 95% of them.
+TEST(GraspTaskSim, RandomScenes) {
+  const int scenes = 20;
+  int good = 0, tried = 0;
+  for (int seed = 1, n = 0; n < scenes; ++seed) {
+    const sim::Scenario scenario = sim::RandomBoxScene(seed);
+    ++tried;
+    const Eigen::Vector3d& size = scenario.objects[0].size_O;
+    if (std::min(size.x(), size.y()) + 2 * grasp::GraspConfig{}.clearance_m >
+        grasp::HandGeometry{}.max_opening_m) {
+      continue;
+    }
+    ++n;
+    const testing::SimOutcome o = RunInSim(scenario);
+    Print("seed " + std::to_string(seed), o);
+    good += o.Success();
+  }
+  std::printf("%d of %d scenes (seeds 1-%d) within 5 mm / 2 deg and held\n", good, scenes, tried);
+  EXPECT_GE(good, 0.95 * scenes);
+}
+
+}  // namespace
+}  // namespace hgrasp::task
