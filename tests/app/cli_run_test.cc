@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <string>
+#include <vector>
 
 #include "tests/app/cli_util.h"
 
@@ -68,6 +69,24 @@ TEST(CliRunTest, DefaultScenarioIsGraspedAndLifted) {
   EXPECT_LE(report["truth"]["run"]["grasp_reached"]["gripper_to_plan_m"].get<double>(), 0.005);
   EXPECT_LE(report["truth"]["run"]["grasp_reached"]["gripper_to_plan_deg"].get<double>(), 2.0);
   EXPECT_NEAR(report["truth"]["run"]["object_rise_m"].get<double>(), 0.05, 0.005);
+}
+
+// DESIGN.md rule 6: the same scenario and seed give the same report, timings aside.
+TEST(CliRunTest, SameScenarioTwiceGivesTheSameReport) {
+  std::vector<nlohmann::json> reports;
+  for (const char* name : {"twice_a", "twice_b"}) {
+    const auto out = FreshOutDir(name);
+    const auto r = RunHgrasp("run " + std::string(HGRASP_ROOT_DIR) +
+                             "/scenarios/default.yaml --no-video --out " + out.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::ifstream in(out / "report.json");
+    nlohmann::json report = nlohmann::json::parse(in);
+    report.erase("timing_s");
+    report.erase("wall_time_s");
+    for (auto& stage : report["stages"]) stage.erase("wall_s");
+    reports.push_back(report);
+  }
+  EXPECT_EQ(reports[0], reports[1]) << reports[0].dump(1) << "\n---\n" << reports[1].dump(1);
 }
 
 TEST(CliRunTest, AbsentTargetExitsOneNamingTheFailure) {
