@@ -130,10 +130,29 @@ bool GripperTracker::Fuse(const std::vector<LedPoint>& points, const std::vector
   return true;
 }
 
+namespace {
+
+// Greedy global nearest neighbour, one to one: the candidate pairs (distance, a, b), a < na and
+// b < nb, taken in order of distance (ties by a, then b); the accepted (a, b).
+std::vector<std::pair<int, int>> GreedyMatch(std::vector<std::tuple<double, int, int>> pairs,
+                                             std::size_t na, std::size_t nb) {
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<bool> a_used(na, false), b_used(nb, false);
+  std::vector<std::pair<int, int>> matches;
+  for (const auto& [d, a, b] : pairs) {
+    if (a_used[a] || b_used[b]) continue;
+    a_used[a] = b_used[b] = true;
+    matches.emplace_back(a, b);
+  }
+  return matches;
+}
+
+}  // namespace
+
 std::vector<int> GripperTracker::AssociateBlobs(const std::vector<LedBlob>& blobs,
                                                 const PinholeCamera& camera, const Pose3& X_KCL,
                                                 const Pose3& X_CE) const {
-  // Greedy global nearest neighbour between blobs and projected LEDs, one to one.
+  // Blobs to projected LEDs, greedy global nearest neighbour.
   std::vector<std::tuple<double, int, int>> pairs;  // distance, blob, LED
   for (int i = 0; i < layout_.size(); ++i) {
     const auto px = camera.Project(X_KCL * (X_CE * layout_.p_E[i]));
@@ -143,12 +162,8 @@ std::vector<int> GripperTracker::AssociateBlobs(const std::vector<LedBlob>& blob
       if (d <= options_.image_gate_px) pairs.emplace_back(d, static_cast<int>(b), i);
     }
   }
-  std::sort(pairs.begin(), pairs.end());
   std::vector<int> blob_of_led(layout_.size(), -1);
-  std::vector<bool> blob_used(blobs.size(), false);
-  for (const auto& [d, b, i] : pairs) {
-    if (blob_used[b] || blob_of_led[i] >= 0) continue;
-    blob_used[b] = true;
+  for (const auto& [b, i] : GreedyMatch(std::move(pairs), blobs.size(), layout_.size())) {
     blob_of_led[i] = b;
   }
   // The gripper's LEDs lie at about the same depth and image alike: a blob much smaller than
@@ -192,13 +207,9 @@ bool GripperTracker::MeasureTracked(const device::StereoFrame& frame) {
       if (d <= options_.association_gate) pairs.emplace_back(d, static_cast<int>(k), i);
     }
   }
-  std::sort(pairs.begin(), pairs.end());
   std::vector<int> ids(points.size(), -1);
-  std::vector<bool> led_used(layout_.size(), false);
-  for (const auto& [d, k, i] : pairs) {
-    if (ids[k] >= 0 || led_used[i]) continue;
+  for (const auto& [k, i] : GreedyMatch(std::move(pairs), points.size(), layout_.size())) {
     ids[k] = i;
-    led_used[i] = true;
   }
   return Fuse(points, ids, /*first=*/false);
 }

@@ -133,6 +133,12 @@ void GraspTask::BeginStage(std::string_view name) {
 }
 
 void GraspTask::EndStage() {
+  if (tracker_) {
+    result_.flashes = tracker_->flashes();
+    result_.recoveries = tracker_->recoveries();
+    result_.measurements = tracker_->measurements();
+    result_.image_measurements = tracker_->image_measurements();
+  }
   StageTiming t;
   t.name = std::string(stage_);
   t.wall_s = Since(stage_wall_);
@@ -149,12 +155,6 @@ void GraspTask::EndStage() {
 bool GraspTask::Fail(Failure f, std::string message) {
   result_.failure = f;
   result_.message = std::move(message);
-  if (tracker_) {
-    result_.flashes = tracker_->flashes();
-    result_.recoveries = tracker_->recoveries();
-    result_.measurements = tracker_->measurements();
-    result_.image_measurements = tracker_->image_measurements();
-  }
   EndStage();
   return false;
 }
@@ -437,10 +437,6 @@ bool GraspTask::Lift() {
     return Fail(Failure::kGraspSlipped, "the box slipped out of the hand while held up");
   }
   result_.lifted = true;
-  result_.flashes = tracker_->flashes();
-  result_.recoveries = tracker_->recoveries();
-  result_.measurements = tracker_->measurements();
-  result_.image_measurements = tracker_->image_measurements();
   EndStage();
   return true;
 }
