@@ -91,19 +91,24 @@ void EmulatorHost::Run() {
       continue;
     }
     pollfd p{fd, POLLIN, 0};
-    const int r = ::poll(&p, 1, tick_ms);
+    ::poll(&p, 1, tick_ms);
     std::lock_guard<std::mutex> lock(mu_);
     if (stop_) return;
     if (pty_.master_fd() != fd) continue;  // vanished or reopened meanwhile
     out.clear();
     const double t = Now();
-    device_->Advance(t, &out);
-    if (r > 0 && (p.revents & POLLIN) != 0) {
-      const ssize_t n = ::read(fd, buf, sizeof(buf));
-      if (n > 0) {
-        device_->Receive(std::span<const std::uint8_t>(buf, static_cast<std::size_t>(n)), t, &out);
-      }
+    // Everything that has arrived goes to the device before it may send anything of its own,
+    // whatever poll said and however late this thread runs: a frame the device sends reflects
+    // every command that reached it before, as on a device with a timer of its own. (Advancing
+    // first sent samples made after a command had arrived that did not show it, and a driver
+    // that counts such samples to call a command lost sent it twice: SensorHand under load.)
+    for (;;) {
+      const ssize_t n = ::read(fd, buf, sizeof(buf));  // the master is non-blocking
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      device_->Receive(std::span<const std::uint8_t>(buf, static_cast<std::size_t>(n)), t, &out);
     }
+    device_->Advance(t, &out);
     if (!out.empty()) WriteAll(fd, out);
   }
 }

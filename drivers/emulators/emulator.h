@@ -27,7 +27,8 @@ class DeviceEmulator {
   virtual void Receive(std::span<const std::uint8_t> in, double t_s,
                        std::vector<std::uint8_t>* out) = 0;
   /// Advances the device model to `t_s`; may append bytes the device sends on its own (data
-  /// streams) to *out. Called every tick and before each Receive.
+  /// streams) to *out. Called every tick, after every byte that has arrived by then has been
+  /// handed to Receive (so Receive advances the model to its `t_s` itself where it needs to).
   virtual void Advance(double t_s, std::vector<std::uint8_t>* out) = 0;
 };
 

@@ -86,6 +86,7 @@ void Val2Emulator::Advance(double t_s, std::vector<std::uint8_t>* out) {
 
 void Val2Emulator::Receive(std::span<const std::uint8_t> in, double t_s,
                            std::vector<std::uint8_t>* out) {
+  Advance(t_s, out);  // a command acts on the arm as it is at t_s
   std::string echo, line;
   for (std::uint8_t b : in) {
     echo.clear();

@@ -51,7 +51,11 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"no_such_file.yaml", "no_such_file.yaml", "no_such_file.yaml"},
                       BadCase{"bad_driver.yaml", "devices.head.driver", "pmd9000"},
                       BadCase{"bad_device_port.yaml", "devices.arm_left.port", "serial port"},
-                      BadCase{"bad_device_baud.yaml", "devices.hand_left.baud", "9601"}));
+                      BadCase{"bad_device_baud.yaml", "devices.hand_left.baud", "9601"}),
+    [](const ::testing::TestParamInfo<BadCase>& info) {
+      const std::string name = info.param.file;
+      return name.substr(0, name.find('.'));
+    });
 
 TEST(CliTest, UsageErrorsExitTwo) {
   EXPECT_EQ(RunHgrasp("").status, 2);

@@ -48,6 +48,54 @@ TEST(EmulatorHost, ServesTheDeviceOnAPty) {
   EXPECT_GT(host.With([](DeviceEmulator& d) { return dynamic_cast<Incrementer&>(d).last_t; }), 0.0);
 }
 
+// Counts the device's own frames (Advance calls) made while bytes the test sent had arrived
+// but had not been handed to the device.
+class ArrivalWatcher final : public DeviceEmulator {
+ public:
+  void Receive(std::span<const std::uint8_t> in, double, std::vector<std::uint8_t>*) override {
+    received += in.size();
+  }
+  void Advance(double, std::vector<std::uint8_t>*) override {
+    if (arrived && received == 0) ++advanced_before_receive;
+  }
+  bool arrived = false;
+  std::size_t received = 0;
+  int advanced_before_receive = 0;
+};
+
+// A command that reached the pty while the host's thread could not run (held off here, as a
+// loaded machine's scheduler does) goes to the device before the device's next own frame: a
+// stream sample sent after a command arrived shows it, which the SensorHand driver's
+// never-twice rule counts on (1 run in 7 sent a command twice under load before).
+TEST(EmulatorHost, BytesThatArrivedGoToTheDeviceBeforeItsNextFrame) {
+  EmulatorHost host(std::make_unique<ArrivalWatcher>());
+  std::string error;
+  auto port = SerialPort::Open({host.port(), 19200}, &error);
+  ASSERT_TRUE(port) << error;
+  for (int round = 0; round < 5; ++round) {
+    host.With([&](DeviceEmulator& d) {
+      auto& w = dynamic_cast<ArrivalWatcher&>(d);
+      w.received = 0;
+      const std::uint8_t msg[] = {0x75, 1, 2, 3};
+      EXPECT_EQ(port->Write(msg), Status::kOk);
+      std::this_thread::sleep_for(std::chrono::milliseconds(30));  // readable on the master
+      w.arrived = true;
+    });
+    bool got = false;
+    for (int i = 0; i < 100 && !got; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      got = host.With(
+          [](DeviceEmulator& d) { return dynamic_cast<ArrivalWatcher&>(d).received == 4; });
+    }
+    ASSERT_TRUE(got);
+    host.With([](DeviceEmulator& d) { dynamic_cast<ArrivalWatcher&>(d).arrived = false; });
+  }
+  EXPECT_EQ(host.With([](DeviceEmulator& d) {
+    return dynamic_cast<ArrivalWatcher&>(d).advanced_before_receive;
+  }),
+            0);
+}
+
 TEST(EmulatorHost, PortVanishesAndComesBackUnderItsLink) {
   const std::string link = ::testing::TempDir() + "hgrasp_emulator_host_link";
   EmulatorHost host(std::make_unique<Incrementer>(), link);

@@ -123,7 +123,6 @@ void ThousandCommands(const std::string& name, const LaserBoardOptions& options,
   EXPECT_GT(st.retransmissions, 0u);
   // ...and the board executed exactly what was commanded: none lost, duplicated or altered.
   EXPECT_EQ(rig.Executed(), commanded);
-  EXPECT_LT(elapsed, 60.0);
 }
 
 TEST(LaserBoardFaults, ThousandCommandsThroughCorruptionAndDropouts) {

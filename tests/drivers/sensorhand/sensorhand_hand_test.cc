@@ -374,7 +374,6 @@ TEST(SensorHandHand, FaultInjection1000Commands) {
   rig.ExpectLogsAgree();
   const auto log = rig.EmuLog();
   std::printf("  hand: %zu speed commands executed, each once\n", log.size());
-  EXPECT_LT(elapsed, 60.0);
 }
 
 }  // namespace

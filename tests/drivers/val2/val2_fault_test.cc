@@ -201,9 +201,6 @@ TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
   }
   EXPECT_EQ(first_diff, expected.size()) << "first difference";
   EXPECT_EQ(log.size(), expected.size());
-  if (plan.garbage_probability == 0.0) {
-    EXPECT_LT(elapsed, 60.0);
-  }
 }
 
 TEST(Val2Faults, ConfirmedReadsAreRightUnderCorruption) {
