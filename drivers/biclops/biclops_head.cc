@@ -467,13 +467,17 @@ Status BiclopsHead::Read(device::HeadState* state) {
   double q[3];
   bool moving = false;
   for (int a = 0; a < 3; ++a) {
+    // The status first, then the position: an axis seen at rest stays there (only this driver
+    // starts profiles), so the position read after it is where the axis stopped. The other way
+    // round, a profile that ends between the two replies (one 9600-baud exchange takes 10 ms)
+    // reads as a head at rest short of its target.
     pmd::Reply reply;
-    Status s = Query(a, pmd::op::kGetActualPosition, 2, &reply);
-    if (s != Status::kOk) return Fail(s);
-    q[a] = static_cast<double>(pmd::ReplyLong(reply)) / options_.axes[Index(a)].counts_per_rad;
-    s = Query(a, pmd::op::kGetActivityStatus, 1, &reply);
+    Status s = Query(a, pmd::op::kGetActivityStatus, 1, &reply);
     if (s != Status::kOk) return Fail(s);
     const bool in_motion = (reply.words[0] & pmd::activity::kInMotion) != 0;
+    s = Query(a, pmd::op::kGetActualPosition, 2, &reply);
+    if (s != Status::kOk) return Fail(s);
+    q[a] = static_cast<double>(pmd::ReplyLong(reply)) / options_.axes[Index(a)].counts_per_rad;
     at_rest_[Index(a)] = !in_motion;
     moving = moving || in_motion;
   }

@@ -79,8 +79,9 @@ class BiclopsHead final : public device::Head {
   explicit BiclopsHead(std::unique_ptr<ByteLink> link,
                        const BiclopsOptions& options = DefaultBiclopsOptions());
 
-  /// Joint angles (GetActualPosition) and whether any axis' profile is running
-  /// (GetActivityStatus, in-motion bit). t_s: seconds since the driver was made (host clock).
+  /// Whether any axis' profile is running (GetActivityStatus, in-motion bit) and the joint
+  /// angles (GetActualPosition, read after the status: a head reported at rest is at the
+  /// angles where it stopped). t_s: seconds since the driver was made (host clock).
   device::Status Read(device::HeadState* state) override;
   /// Starts every axis towards its target at the axis speed limit (returns once the chip has
   /// the moves; see Read for their progress). kRejected for a target outside the joint range.

@@ -102,6 +102,40 @@ class ScriptedLink final : public ByteLink {
   std::size_t reply_bytes_left_ = 0;
 };
 
+// Passes bytes through, but holds the next GetActivityStatus packet of axis 0 until the emulated
+// pan axis has stopped: a profile that ends while a Read is under way, as on a slow line.
+class HeldStatusLink final : public ByteLink {
+ public:
+  HeldStatusLink(std::unique_ptr<ByteLink> inner, EmulatorHost* host)
+      : inner_(std::move(inner)), host_(host) {}
+  void HoldNextStatus() { hold_ = true; }
+  bool held() const { return held_; }
+  Status Write(std::span<const std::uint8_t> bytes) override {
+    if (hold_ && bytes.size() == 4 && bytes[2] == 0 && bytes[3] == op::kGetActivityStatus) {
+      hold_ = false;
+      const auto t0 = Clock::now();
+      while (PanMoving() && Since(t0) < 5.0) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      }
+      held_ = !PanMoving();
+    }
+    return inner_->Write(bytes);
+  }
+  Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+    return inner_->Read(buf, timeout_s, n);
+  }
+  void Discard() override { inner_->Discard(); }
+
+ private:
+  bool PanMoving() {
+    return host_->With(
+        [](DeviceEmulator& d) { return dynamic_cast<BiclopsEmulator&>(d).chip().moving(0); });
+  }
+  std::unique_ptr<ByteLink> inner_;
+  EmulatorHost* host_;
+  bool hold_ = false, held_ = false;
+};
+
 TEST(BiclopsHead, EachDamagedExchangeLeavesTheCommandExecutedOnce) {
   using Fault = ScriptedLink::Fault;
   struct Case {
@@ -236,17 +270,39 @@ TEST(BiclopsHead, MoveToReachesTheTargetsAndReadFollows) {
   std::printf("MoveTo (first, with initialisation) took %.1f ms\n", command_s * 1e3);
 }
 
+TEST(BiclopsHead, AHeadReadAtRestIsWhereItStopped) {
+  // The pan profile ends while a Read is under way. Reading the position before the status
+  // reported a head at rest at an angle it had passed (pan about 0 of 0.1 rad here). The move
+  // takes 0.28 s, within the driver's 0.4 s silence limit.
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  auto held = std::make_unique<HeldStatusLink>(OpenPort(host.port()), &host);
+  HeldStatusLink* line = held.get();
+  BiclopsHead head(std::move(held));
+  ASSERT_EQ(head.Initialize(), Status::kOk);
+  ASSERT_EQ(head.MoveTo({0.1, 0.0, 0.0}), Status::kOk);
+  line->HoldNextStatus();
+  device::HeadState s;
+  ASSERT_EQ(head.Read(&s), Status::kOk);
+  ASSERT_TRUE(line->held());
+  EXPECT_FALSE(s.moving);
+  EXPECT_NEAR(s.q.pan, 0.1, 2.0 * 3.14159265358979323846 / 12000.0);
+}
+
 TEST(BiclopsHead, MovesAtTheSpeedLimit) {
   EmulatorHost host(std::make_unique<BiclopsEmulator>());
   BiclopsHead head(OpenPort(host.port()));
   ASSERT_EQ(head.Initialize(), Status::kOk);
-  // Pan 90 deg at 150 deg/s, 300 deg/s^2: 0.5 s ramps (37.5 deg) + 0.1 s cruise = 1.1 s.
+  // Pan 3 rad (171.9 deg) at 150 deg/s, 300 deg/s^2: two 0.5 s ramps (75 deg) and 96.9 deg of
+  // cruise (0.646 s): 1.646 s. Twice the speed would take 1.514 s (a triangle), half the speed
+  // 2.542 s, half the acceleration 2.146 s. The emulated chip starts the profile no earlier than
+  // the MoveTo; the upper bound leaves 0.4 s for the host's scheduling.
   const auto t0 = Clock::now();
-  ASSERT_EQ(head.MoveTo({3.14159265358979323846 / 2, 0.0, 0.0}), Status::kOk);
-  WaitStill(head);
+  ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
+  const device::HeadState s = WaitStill(head);
   const double took = Since(t0);
-  EXPECT_GT(took, 1.0);
-  EXPECT_LT(took, 1.5);
+  EXPECT_NEAR(s.q.pan, 3.0, 2.0 * 3.14159265358979323846 / 12000.0);
+  EXPECT_GT(took, 1.6);
+  EXPECT_LT(took, 2.05);
 }
 
 TEST(BiclopsHead, RejectsTargetsOutsideTheRangeWithoutSending) {
