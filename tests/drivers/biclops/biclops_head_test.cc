@@ -22,6 +22,9 @@ using device::Status;
 namespace op = pmd::op;
 using Clock = std::chrono::steady_clock;
 
+// One encoder count of the default head, rad (12000 counts per turn).
+constexpr double kCount = 2.0 * 3.14159265358979323846 / 12000.0;
+
 double Since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -241,10 +244,9 @@ TEST(BiclopsHead, MoveToReachesTheTargetsAndReadFollows) {
   EXPECT_TRUE(s.moving);
   s = WaitStill(head);
   EXPECT_FALSE(s.moving);
-  const double count = 2.0 * 3.14159265358979323846 / 12000.0;
-  EXPECT_NEAR(s.q.pan, 0.5, count);
-  EXPECT_NEAR(s.q.tilt, -0.3, count);
-  EXPECT_NEAR(s.q.verge, 0.2, count);
+  EXPECT_NEAR(s.q.pan, 0.5, kCount);
+  EXPECT_NEAR(s.q.tilt, -0.3, kCount);
+  EXPECT_NEAR(s.q.verge, 0.2, kCount);
   EXPECT_GT(s.t_s, 0.0);
   const std::array<std::int32_t, 3> counts = head.ToCounts(target);
   EXPECT_EQ(counts[0], 955);  // 0.5 rad * 12000 / 2 pi = 954.93
@@ -266,7 +268,7 @@ TEST(BiclopsHead, MoveToReachesTheTargetsAndReadFollows) {
   EXPECT_EQ(log[12], (PmdExecuted{0, 0, op::kSetPosition, -955}));
   EXPECT_EQ(log[13], (PmdExecuted{0, 0, op::kUpdate, 0}));
   s = WaitStill(head);
-  EXPECT_NEAR(s.q.pan, -0.5, count);
+  EXPECT_NEAR(s.q.pan, -0.5, kCount);
   std::printf("MoveTo (first, with initialisation) took %.1f ms\n", command_s * 1e3);
 }
 
@@ -285,7 +287,7 @@ TEST(BiclopsHead, AHeadReadAtRestIsWhereItStopped) {
   ASSERT_EQ(head.Read(&s), Status::kOk);
   ASSERT_TRUE(line->held());
   EXPECT_FALSE(s.moving);
-  EXPECT_NEAR(s.q.pan, 0.1, 2.0 * 3.14159265358979323846 / 12000.0);
+  EXPECT_NEAR(s.q.pan, 0.1, kCount);
 }
 
 TEST(BiclopsHead, MovesAtTheSpeedLimit) {
@@ -300,7 +302,7 @@ TEST(BiclopsHead, MovesAtTheSpeedLimit) {
   ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
   const device::HeadState s = WaitStill(head);
   const double took = Since(t0);
-  EXPECT_NEAR(s.q.pan, 3.0, 2.0 * 3.14159265358979323846 / 12000.0);
+  EXPECT_NEAR(s.q.pan, 3.0, kCount);
   EXPECT_GT(took, 1.6);
   EXPECT_LT(took, 2.05);
 }
