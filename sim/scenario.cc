@@ -1,5 +1,6 @@
 #include "sim/scenario.h"
 
+#include <sys/stat.h>
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
@@ -16,6 +17,7 @@
 #include <utility>
 
 #include "common/error.h"
+#include "common/yaml_file.h"
 #include "common/yaml_util.h"
 
 namespace hgrasp::sim {
@@ -62,6 +64,22 @@ using yaml::ParseUnsigned;
 using yaml::QuoteHint;
 using yaml::Render;
 
+// What a serial port's path opens, for telling whether two paths are one port: the device
+// number of a character device (any path to it: a symlink, /dev//ttyS9, a second device node),
+// the inode of another existing file, else the path with its symlinks resolved and "//" and
+// "." taken out.
+std::string PortIdentity(const std::string& port) {
+  struct stat st {};
+  if (::stat(port.c_str(), &st) == 0) {
+    if (S_ISCHR(st.st_mode)) return "char " + std::to_string(static_cast<unsigned long>(st.st_rdev));
+    return "inode " + std::to_string(static_cast<unsigned long>(st.st_dev)) + ":" +
+           std::to_string(static_cast<unsigned long>(st.st_ino));
+  }
+  std::error_code ec;
+  const std::filesystem::path canonical = std::filesystem::weakly_canonical(port, ec);
+  return "path " + (ec ? std::filesystem::path(port).lexically_normal() : canonical).string();
+}
+
 bool IsIdentifier(const std::string& s) {
   if (s.empty()) return false;
   for (char c : s) {
@@ -94,10 +112,7 @@ class Parser {
   Scenario Parse(const std::string& text);
 
  private:
-  std::string Where(const YAML::Mark& mark) const {
-    if (mark.line < 0) return path_;
-    return path_ + ":" + std::to_string(mark.line + 1);
-  }
+  std::string Where(const YAML::Mark& mark) const { return yaml::Where(path_, mark); }
 
   [[noreturn]] void Fail(const YAML::Mark& mark, const std::string& field, const std::string& value,
                          const std::string& expected) const {
@@ -215,7 +230,11 @@ ObjectSpec Parser::ParseObject(const YAML::Node& n, const std::string& field,
   o.position_W = Numbers(nodes->position, Join(field, "position"), 2, pos_expected);
 
   if (const YAML::Node* yaw = Find(e, "yaw_deg")) {
-    o.yaw = DegToRad(Number(*yaw, Join(field, "yaw_deg"), "a yaw about W z in degrees"));
+    const std::string yaw_expected = "a yaw about W z of -" + Fixed(kMaxYawDeg, 0) + " to " +
+                                     Fixed(kMaxYawDeg, 0) + " deg";
+    const double deg = Number(*yaw, Join(field, "yaw_deg"), yaw_expected);
+    if (std::abs(deg) > kMaxYawDeg) Fail(*yaw, Join(field, "yaw_deg"), yaw_expected);
+    o.yaw = DegToRad(deg);
   }
 
   const std::string color_field = Join(field, "color");
@@ -227,8 +246,11 @@ ObjectSpec Parser::ParseObject(const YAML::Node& n, const std::string& field,
   }
 
   if (const YAML::Node* mass = Find(e, "mass")) {
-    o.mass = Number(*mass, Join(field, "mass"), "a positive mass in kg");
-    if (o.mass <= 0.0) Fail(*mass, Join(field, "mass"), "a positive mass in kg");
+    const std::string mass_expected = "a mass of " + Fixed(kMinMass, 2) + "-" +
+                                      Fixed(kMaxMass, 2) +
+                                      " kg (the Puma 260 with its hand lifts about 0.5 kg)";
+    o.mass = Number(*mass, Join(field, "mass"), mass_expected);
+    if (o.mass < kMinMass || o.mass > kMaxMass) Fail(*mass, Join(field, "mass"), mass_expected);
   }
 
   if (const YAML::Node* specular = Find(e, "specular")) {
@@ -243,21 +265,37 @@ InterferenceSpec Parser::ParseInterference(const YAML::Node& n, const std::strin
   const Entries e = MapOf(n, field, {"origin", "sweep_deg", "period_s"},
                           "an interfering laser: a map with origin, sweep_deg, period_s");
   InterferenceSpec s;
-  const std::string origin_expected = "the source position in W in m, as [x, y, z]";
-  s.origin_W = Numbers(Require(e, n, field, "origin", origin_expected), Join(field, "origin"), 3,
-                       origin_expected);
+  const std::string origin_expected =
+      "the source position in W in m, as [x, y, z]: in the room (|x|, |y| <= " +
+      Fixed(kMaxInterferenceReach, 0) + " m) above the table top (0 < z <= " +
+      Fixed(kMaxInterferenceHeight, 0) + " m)";
+  const YAML::Node& origin = Require(e, n, field, "origin", origin_expected);
+  s.origin_W = Numbers(origin, Join(field, "origin"), 3, origin_expected);
+  if (std::abs(s.origin_W.x()) > kMaxInterferenceReach ||
+      std::abs(s.origin_W.y()) > kMaxInterferenceReach || s.origin_W.z() <= 0.0 ||
+      s.origin_W.z() > kMaxInterferenceHeight) {
+    Fail(origin, Join(field, "origin"), origin_expected);
+  }
 
-  const std::string sweep_expected = "the plane's angle range in degrees, as [min, max], min < max";
+  const std::string sweep_expected =
+      "the plane's angle range in degrees, as [min, max], min < max, each within +-" +
+      Fixed(kMaxSweepDeg, 0);
   const YAML::Node& sweep = Require(e, n, field, "sweep_deg", sweep_expected);
   const Eigen::VectorXd sweep_deg = Numbers(sweep, Join(field, "sweep_deg"), 2, sweep_expected);
-  if (sweep_deg[0] >= sweep_deg[1]) Fail(sweep, Join(field, "sweep_deg"), sweep_expected);
+  if (sweep_deg[0] >= sweep_deg[1] || std::abs(sweep_deg[0]) > kMaxSweepDeg ||
+      std::abs(sweep_deg[1]) > kMaxSweepDeg) {
+    Fail(sweep, Join(field, "sweep_deg"), sweep_expected);
+  }
   s.sweep_min = DegToRad(sweep_deg[0]);
   s.sweep_max = DegToRad(sweep_deg[1]);
 
-  const std::string period_expected = "a positive sweep period in s";
+  const std::string period_expected =
+      "a sweep period in s, > 0 and at most " + Fixed(kMaxPeriodS, 0);
   const YAML::Node& period = Require(e, n, field, "period_s", period_expected);
   s.period_s = Number(period, Join(field, "period_s"), period_expected);
-  if (s.period_s <= 0.0) Fail(period, Join(field, "period_s"), period_expected);
+  if (s.period_s <= 0.0 || s.period_s > kMaxPeriodS) {
+    Fail(period, Join(field, "period_s"), period_expected);
+  }
   return s;
 }
 
@@ -377,23 +415,30 @@ void Parser::CheckAcrossDevices(const Scenario& s, const YAML::Node& devices) co
          "sim, unless devices.laser is the laser_board too: real cameras take the laser's encoder "
          "count latched at each frame from the board");
   }
-  // One port, one device; the laser and the LEDs share the laser board.
-  std::map<std::string, std::string> owner;  // port -> device key
+  // One port, one device; the laser and the LEDs share the laser board. Ports are compared by
+  // the device they open, not by how their paths are spelled.
+  std::map<std::string, std::string> owner;  // port identity -> device key
   for (const auto& [key, d] : s.devices) {
     if (!d.serial()) continue;
-    const auto [it, fresh] = owner.emplace(d.port, key);
+    const auto [it, fresh] = owner.emplace(PortIdentity(d.port), key);
     if (fresh) continue;
     const DeviceSpec& other = s.devices.at(it->second);
     const bool board = d.driver == "laser_board" && other.driver == "laser_board";
     if (!board) {
       Fail(devices[key]["port"], Join(Join("devices", key), "port"),
-           "a port of its own (devices." + it->second + " uses it)");
+           "a port of its own (devices." + it->second + " uses it, as " + other.port + ")");
     }
     if (d.baud != other.baud || d.framing != other.framing) {
       Fail(devices[key]["port"], Join(Join("devices", key), "port"),
            "the laser and the LEDs on one board: the same baud and framing as devices." +
                it->second);
     }
+  }
+  const DeviceSpec* leds = spec("leds");
+  if (laser != nullptr && leds != nullptr && laser->driver == "laser_board" &&
+      leds->driver == "laser_board" && PortIdentity(laser->port) != PortIdentity(leds->port)) {
+    Fail(devices["leds"]["port"], "devices.leds.port",
+         "the laser's port, " + laser->port + " (the laser and the LEDs are one board)");
   }
 }
 
@@ -433,30 +478,10 @@ void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes
 }
 
 Scenario Parser::Parse(const std::string& text) {
-  std::vector<YAML::Node> docs;
-  try {
-    docs = YAML::LoadAll(text);
-  } catch (const YAML::Exception& e) {
-    // The offending line as written, so the user sees what the parser choked on.
-    std::string line;
-    if (e.mark.line >= 0) {
-      std::istringstream in(text);
-      for (int i = 0; i <= e.mark.line && std::getline(in, line); ++i) {
-      }
-      const auto first = line.find_first_not_of(" \t");
-      line = first == std::string::npos ? "" : line.substr(first);
-    }
-    Fail(e.mark, "YAML syntax", line.empty() ? e.msg : line, "well-formed YAML (" + e.msg + ")");
-  }
-
   const std::string top_expected =
       "a map of scenario fields: name, seed, camera_noise, lighting, wall, objects, "
       "interference, task, devices";
-  if (docs.empty() || docs.front().IsNull()) {
-    Fail(YAML::Mark::null_mark(), "top level", "", top_expected + " (the file is empty)");
-  }
-  if (docs.size() > 1) Fail(docs[1].Mark(), "top level", "---", "a single YAML document");
-  const YAML::Node& root = docs.front();
+  const YAML::Node root = yaml::LoadDocument(text, path_, top_expected);
   if (!root.IsMap()) Fail(root, "top level", top_expected);
   const Entries e = MapOf(root, "",
                           {"name", "seed", "camera_noise", "lighting", "wall", "objects",
@@ -474,9 +499,12 @@ Scenario Parser::Parse(const std::string& text) {
   }
 
   if (const YAML::Node* noise = Find(e, "camera_noise")) {
-    const std::string expected = "a non-negative noise std. dev. in grey levels (0-255)";
+    const std::string expected = "a camera noise std. dev. of 0-" + Fixed(kMaxCameraNoise, 0) +
+                                 " grey levels (of 255; a real camera shows 1-3)";
     s.camera_noise = Number(*noise, "camera_noise", expected);
-    if (s.camera_noise < 0.0) Fail(*noise, "camera_noise", expected);
+    if (s.camera_noise < 0.0 || s.camera_noise > kMaxCameraNoise) {
+      Fail(*noise, "camera_noise", expected);
+    }
   }
 
   if (const YAML::Node* lighting = Find(e, "lighting")) {
@@ -499,11 +527,14 @@ Scenario Parser::Parse(const std::string& text) {
 
   YAML::Node wall_x_node;
   if (const YAML::Node* wall = Find(e, "wall")) {
-    const std::string wall_expected = "a wall plane x in m, > " + Fixed(kMinWallX, 2);
+    const std::string wall_expected = "a wall plane x in m, > " + Fixed(kMinWallX, 2) +
+                                      " and at most " + Fixed(kMaxWallX, 1);
     const Entries we = MapOf(*wall, "wall", {"x"}, "a map such as {x: 0.9}");
     wall_x_node = Require(we, *wall, "wall", "x", wall_expected);
     s.wall_x = Number(wall_x_node, "wall.x", wall_expected);
-    if (*s.wall_x <= kMinWallX) Fail(wall_x_node, "wall.x", wall_expected);
+    if (*s.wall_x <= kMinWallX || *s.wall_x > kMaxWallX) {
+      Fail(wall_x_node, "wall.x", wall_expected);
+    }
   }
 
   if (const YAML::Node* interference = Find(e, "interference")) {
@@ -511,7 +542,19 @@ Scenario Parser::Parse(const std::string& text) {
       Fail(*interference, "interference", "a list of interfering lasers");
     }
     for (std::size_t i = 0; i < interference->size(); ++i) {
-      s.interference.push_back(ParseInterference((*interference)[i], Index("interference", i)));
+      const YAML::Node& node = (*interference)[i];
+      const std::string field = Index("interference", i);
+      s.interference.push_back(ParseInterference(node, field));
+      // A laser inside a box lights nothing the cameras see.
+      for (std::size_t j = 0; j < s.objects.size(); ++j) {
+        const ObjectSpec& o = s.objects[j];
+        const Eigen::Vector3d p_O = o.X_WO().inverse() * s.interference.back().origin_W;
+        if ((p_O.cwiseAbs().array() <= 0.5 * o.size_O.array()).all()) {
+          Fail(node["origin"], Join(field, "origin"),
+               "a source outside every object (it is inside " + Index("objects", j) + " '" +
+                   o.name + "')");
+        }
+      }
     }
   }
 
@@ -574,19 +617,7 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& path_for
 }
 
 Scenario LoadScenario(const std::string& path) {
-  namespace fs = std::filesystem;
-  const std::string expected = "a readable scenario file (YAML)";
-  if (path.empty()) throw InputError("", "scenario file", "", expected);
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) throw InputError(path, "", path, expected + ": no such file");
-  if (fs::is_directory(status)) throw InputError(path, "", path, expected + ", not a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", path, expected + ": " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path, "", path, expected + ": read failed");
-  return ParseScenario(text.str(), path);
+  return ParseScenario(yaml::ReadText(path, "a readable scenario file (YAML)"), path);
 }
 
 std::array<Eigen::Vector2d, 4> ObjectFootprint(const ObjectSpec& o) {

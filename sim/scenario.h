@@ -33,6 +33,23 @@ constexpr double kMinWallX = 0.5;
 /// Largest accepted task lift (m): the Puma 260 reaches about 0.4 m from its shoulder.
 constexpr double kMaxLift = 0.3;
 
+/// Physical ranges of the other scenario fields: what a real table, box, camera and room can be.
+/// Camera noise (grey levels of 255, std. dev.): a PAL camera through a frame grabber shows 1-3;
+/// 25 is a very poor one, and past it no stripe is found at all.
+constexpr double kMaxCameraNoise = 25.0;
+/// Object mass (kg): a 10 g box is paper the hand would crush; the Puma 260 carries about 1 kg,
+/// of which the hand takes about half.
+constexpr double kMinMass = 0.01, kMaxMass = 0.5;
+/// Yaw (deg): one turn either way.
+constexpr double kMaxYawDeg = 360.0;
+/// Another robot's laser (m, W): in the room around the table, above the table top, and not
+/// inside any object.
+constexpr double kMaxInterferenceReach = 5.0, kMaxInterferenceHeight = 3.0;
+/// Its sweep (deg, each end) and period (s).
+constexpr double kMaxSweepDeg = 180.0, kMaxPeriodS = 60.0;
+/// The farthest wall (m, x in W): a room's wall.
+constexpr double kMaxWallX = 5.0;
+
 /// Colour names accepted in task.target.color.
 inline constexpr std::array<std::string_view, 10> kColorNames = {
     "red", "orange", "yellow", "green", "cyan", "blue", "magenta", "white", "grey", "black"};

@@ -12,8 +12,14 @@ namespace hgrasp::yaml {
 
 bool IsQuoted(const YAML::Node& n) { return n.Tag() == "!"; }
 
+namespace {
+// A plain scalar: unquoted and untagged (yaml_file.h refuses tags when a file is read; a node
+// built another way is held to the same rule).
+bool Plain(const YAML::Node& n) { return n.IsScalar() && (n.Tag() == "?" || n.Tag().empty()); }
+}  // namespace
+
 std::optional<double> ParseNumber(const YAML::Node& n) {
-  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  if (!Plain(n)) return std::nullopt;
   std::string_view s = n.Scalar();
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
   if (s.empty() || s.front() == '+') return std::nullopt;
@@ -24,7 +30,7 @@ std::optional<double> ParseNumber(const YAML::Node& n) {
 }
 
 std::optional<std::uint64_t> ParseUnsigned(const YAML::Node& n) {
-  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  if (!Plain(n)) return std::nullopt;
   std::string_view s = n.Scalar();
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
   if (s.empty() || s.front() < '0' || s.front() > '9') return std::nullopt;
@@ -35,7 +41,7 @@ std::optional<std::uint64_t> ParseUnsigned(const YAML::Node& n) {
 }
 
 std::optional<long long> ParseInteger(const YAML::Node& n) {
-  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  if (!Plain(n)) return std::nullopt;
   std::string_view s = n.Scalar();
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
   if (s.empty() || s.front() == '+') return std::nullopt;
@@ -46,7 +52,7 @@ std::optional<long long> ParseInteger(const YAML::Node& n) {
 }
 
 std::optional<bool> ParseBool(const YAML::Node& n) {
-  if (!n.IsScalar() || IsQuoted(n)) return std::nullopt;
+  if (!Plain(n)) return std::nullopt;
   const std::string& s = n.Scalar();
   if (s == "true" || s == "True" || s == "TRUE") return true;
   if (s == "false" || s == "False" || s == "FALSE") return false;
@@ -54,40 +60,50 @@ std::optional<bool> ParseBool(const YAML::Node& n) {
 }
 
 namespace {
-void RenderTo(const YAML::Node& n, bool top, std::string* out) {
-  if (!n.IsDefined() || n.IsNull()) return;
+
+// Longest rendering of a value in a message.
+constexpr std::size_t kMaxRenderChars = 100;
+// Deepest level rendered: the loaders' nodes are checked to be a tree of bounded depth
+// (yaml_file.h), but a message must never be what runs away.
+constexpr int kMaxRenderDepth = 8;
+
+// Appends `n` in flow style, stopping once `out` is longer than a message shows.
+void RenderTo(const YAML::Node& n, bool top, int depth, std::string* out) {
+  if (!n.IsDefined() || n.IsNull() || out->size() > kMaxRenderChars) return;
+  if (depth > kMaxRenderDepth) {
+    *out += "...";
+    return;
+  }
   if (n.IsScalar()) {
     *out += !top && IsQuoted(n) ? "\"" + n.Scalar() + "\"" : n.Scalar();
   } else if (n.IsSequence()) {
     *out += "[";
-    for (std::size_t i = 0; i < n.size(); ++i) {
+    for (std::size_t i = 0; i < n.size() && out->size() <= kMaxRenderChars; ++i) {
       if (i > 0) *out += ", ";
-      RenderTo(n[i], false, out);
+      RenderTo(n[i], false, depth + 1, out);
     }
     *out += "]";
   } else if (n.IsMap()) {
     *out += "{";
     bool first = true;
     for (const auto& kv : n) {
+      if (out->size() > kMaxRenderChars) break;
       if (!first) *out += ", ";
       first = false;
-      RenderTo(kv.first, false, out);
+      RenderTo(kv.first, false, depth + 1, out);
       *out += ": ";
-      RenderTo(kv.second, false, out);
+      RenderTo(kv.second, false, depth + 1, out);
     }
     *out += "}";
   }
 }
 
-// A node as the user wrote it, for error messages: a scalar verbatim, a collection in flow style
-// with its quoted strings in quotes; null or missing as "" (InputError says "missing or empty").
 }  // namespace
 
 std::string Render(const YAML::Node& n) {
   std::string text;
-  RenderTo(n, true, &text);
-  constexpr std::size_t kMaxChars = 100;
-  if (text.size() > kMaxChars) text = text.substr(0, kMaxChars - 3) + "...";
+  RenderTo(n, true, 0, &text);
+  if (text.size() > kMaxRenderChars) text = text.substr(0, kMaxRenderChars - 3) + "...";
   return text;
 }
 

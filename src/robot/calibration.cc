@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/yaml_file.h"
 #include "common/yaml_util.h"
 
 namespace hgrasp::robot {
@@ -27,6 +28,12 @@ namespace {
 constexpr char kFrameH[] = "camera_bracket";
 // Tolerance on the unit length of axis_H and normal0_H.
 constexpr double kUnitTolerance = 1e-6;
+// The two cameras' focal lengths, and fy against fx, agree within this ratio.
+constexpr double kMaxFocalRatio = 1.1;
+// Horizontal fields of view of real lenses (deg): 10 (a long lens) to 150 (a fisheye's edge).
+constexpr double kMinFovDeg = 10.0, kMaxFovDeg = 150.0;
+// The laser's axis and plane are on the head (m).
+constexpr double kMaxLaserReach = 0.5;
 
 // Strict scalars and message helpers: common/yaml_util.h.
 using yaml::IsQuoted;
@@ -69,27 +76,9 @@ class Reader {
 
   // The file's single YAML document, a map.
   YAML::Node Root(const std::string& text, const std::string& expected) const {
-    std::vector<YAML::Node> docs;
-    try {
-      docs = YAML::LoadAll(text);
-    } catch (const YAML::Exception& e) {
-      // The offending line as written, so the user sees what the parser choked on.
-      std::string line;
-      if (e.mark.line >= 0) {
-        std::istringstream in(text);
-        for (int i = 0; i <= e.mark.line && std::getline(in, line); ++i) {
-        }
-        const auto first = line.find_first_not_of(" \t");
-        line = first == std::string::npos ? "" : line.substr(first);
-      }
-      Fail(e.mark, "YAML syntax", line.empty() ? e.msg : line, "well-formed YAML (" + e.msg + ")");
-    }
-    if (docs.empty() || docs.front().IsNull()) {
-      Fail(YAML::Mark::null_mark(), "top level", "", expected + " (the file is empty)");
-    }
-    if (docs.size() > 1) Fail(docs[1].Mark(), "top level", "---", "a single YAML document");
-    if (!docs.front().IsMap()) Fail(docs.front(), "top level", expected);
-    return docs.front();
+    const YAML::Node root = yaml::LoadDocument(text, path_, expected);
+    if (!root.IsMap()) Fail(root, "top level", expected);
+    return root;
   }
 
   // Checks that `n` is a map whose keys are all in `allowed`, each once; returns its entries.
@@ -155,29 +144,10 @@ class Reader {
   }
 
  private:
-  std::string Where(const YAML::Mark& mark) const {
-    if (mark.line < 0) return path_;
-    return path_ + ":" + std::to_string(mark.line + 1);
-  }
+  std::string Where(const YAML::Mark& mark) const { return yaml::Where(path_, mark); }
 
   std::string path_;
 };
-
-// The whole file as text; `expected` names the kind of file in errors.
-std::string ReadFile(const std::string& path, const std::string& expected) {
-  namespace fs = std::filesystem;
-  if (path.empty()) throw InputError("", "file name", "", expected);
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) throw InputError(path, "", path, expected);
-  if (fs::is_directory(status)) throw InputError(path, "", path, expected + ", not a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", path, expected + ": " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path, "", path, expected + ": read failed");
-  return text.str();
-}
 
 // Runs `parse`, turning anything yaml-cpp throws beyond a syntax error into an InputError.
 template <typename Parse>
@@ -217,6 +187,21 @@ PinholeCamera ParseCamera(const Reader& r, const YAML::Node& n, const std::strin
   };
   c.fx = focal("fx", "u");
   c.fy = focal("fy", "v");
+  // A real camera: its pixels square within 10 % (PAL digitised at 320 x 240 is square within
+  // 2 %), its horizontal field of view that of a lens one can buy.
+  const double aspect = c.fy / c.fx;
+  if (aspect < 1.0 / kMaxFocalRatio || aspect > kMaxFocalRatio) {
+    r.Fail(n["fy"], Join(field, "fy"),
+           "a focal length within 10% of fx (square pixels; fx is " + Exact(c.fx) + ")");
+  }
+  const double hfov_deg = 2.0 * std::atan(0.5 * c.width / c.fx) * 180.0 / kPi;
+  if (hfov_deg < kMinFovDeg || hfov_deg > kMaxFovDeg) {
+    r.Fail(n["fx"], Join(field, "fx"),
+           "a focal length giving a horizontal field of view of " +
+               std::to_string(int(kMinFovDeg)) + "-" + std::to_string(int(kMaxFovDeg)) +
+               " deg over the image's " + std::to_string(c.width) + " pixels (this one gives " +
+               std::to_string(hfov_deg) + " deg)");
+  }
 
   const auto centre = [&](std::string_view key, const char* axis, int pixels) {
     const std::string expected = std::string("the principal point's ") + axis +
@@ -261,9 +246,13 @@ std::string LaserProblem(const LaserCalibration& c, std::string* field) {
     std::snprintf(dot, sizeof dot, "%.3g", cos_angle);
     return std::string("a normal at least 60 deg from axis_H (axis_H . normal0_H is ") + dot + ")";
   }
-  if (!std::isfinite(c.offset_m)) {
+  if (c.point_H.norm() > kMaxLaserReach) {
+    *field = "point_H";
+    return "a point on the head, within 0.5 m of the camera bracket";
+  }
+  if (!std::isfinite(c.offset_m) || std::abs(c.offset_m) > kMaxLaserReach) {
     *field = "offset_m";
-    return "a finite distance in m";
+    return "a distance of the plane from its axis within 0.5 m (the laser is on the head)";
   }
   if (!std::isfinite(c.rad_per_count) || c.rad_per_count <= 0.0) {
     *field = "rad_per_count";
@@ -330,7 +319,10 @@ LaserCalibration ParseLaser(const std::string& text, const std::string& path) {
 }  // namespace
 
 StereoIntrinsics LoadStereoIntrinsics(const std::string& path) {
-  const std::string text = ReadFile(path, "a readable camera intrinsics file");
+  return ParseStereoIntrinsics(yaml::ReadText(path, "a readable camera intrinsics file"), path);
+}
+
+StereoIntrinsics ParseStereoIntrinsics(const std::string& text, const std::string& path) {
   const std::string top_expected =
       "camera intrinsics: a map with left and right, each {width, height, fx, fy, cx, cy}";
   return Guarded(path, top_expected, [&] {
@@ -338,9 +330,22 @@ StereoIntrinsics LoadStereoIntrinsics(const std::string& path) {
     const YAML::Node root = r.Root(text, top_expected);
     const Entries e = r.MapOf(root, "", {"left", "right"}, top_expected);
     StereoIntrinsics s;
-    s.left = ParseCamera(r, r.Require(e, root, "", "left", "the left camera's intrinsics"), "left");
-    s.right =
-        ParseCamera(r, r.Require(e, root, "", "right", "the right camera's intrinsics"), "right");
+    s.path = path;
+    const YAML::Node& left = r.Require(e, root, "", "left", "the left camera's intrinsics");
+    const YAML::Node& right = r.Require(e, root, "", "right", "the right camera's intrinsics");
+    s.left = ParseCamera(r, left, "left");
+    s.right = ParseCamera(r, right, "right");
+    // The two cameras of one head: the same frame grabber, the same lens model.
+    if (s.right.width != s.left.width || s.right.height != s.left.height) {
+      r.Fail(right, "right", "the left camera's image size, " + std::to_string(s.left.width) +
+                                 " x " + std::to_string(s.left.height) + " (one frame grabber)");
+    }
+    const double ratio = s.right.fx / s.left.fx;
+    if (ratio < 1.0 / kMaxFocalRatio || ratio > kMaxFocalRatio) {
+      r.Fail(right, "right.fx",
+             "a focal length within " + std::to_string(int(std::lround(100 * (kMaxFocalRatio - 1)))) +
+                 "% of the left camera's (the same lens on both)");
+    }
     return s;
   });
 }
@@ -354,7 +359,10 @@ Plane LaserCalibration::PlaneH(std::int32_t count) const {
 }
 
 LaserCalibration LoadLaserCalibration(const std::string& path) {
-  const std::string text = ReadFile(path, "a readable laser calibration file");
+  return ParseLaserCalibration(yaml::ReadText(path, "a readable laser calibration file"), path);
+}
+
+LaserCalibration ParseLaserCalibration(const std::string& text, const std::string& path) {
   return Guarded(path, "a laser calibration file", [&] { return ParseLaser(text, path); });
 }
 

@@ -15,6 +15,7 @@ namespace hgrasp::robot {
 /// The intrinsics of both cameras (ideal pinholes: no distortion).
 struct StereoIntrinsics {
   PinholeCamera left, right;
+  std::string path;  ///< the file they were read from (for errors found against the frames)
 };
 
 /// Reads a camera intrinsics file:
@@ -27,7 +28,13 @@ struct StereoIntrinsics {
 /// @throws hgrasp::InputError naming file:line, the field (e.g. "left.fx") and the value for a
 ///         missing or unreadable file, bad YAML, unknown or repeated keys, missing fields, wrong
 ///         types or values out of range.
+///         Each camera's fy within 10% of its fx (square pixels) and a horizontal field of view
+///         of 10-150 deg; both cameras of one image size, their focal lengths within 10%. That
+///         the size is the frames' is checked against the first frame (scan::CheckFrameSize).
 StereoIntrinsics LoadStereoIntrinsics(const std::string& path);
+
+/// As LoadStereoIntrinsics, on the text of such a file (`path` names it in errors).
+StereoIntrinsics ParseStereoIntrinsics(const std::string& text, const std::string& path);
 
 /// The laser's calibration: a light plane turning about an axis fixed in H (the URDF link
 /// "camera_bracket"). At encoder count e:
@@ -56,8 +63,12 @@ struct LaserCalibration {
 /// @throws hgrasp::InputError naming file:line, the field and the value for a missing or
 ///         unreadable file, bad YAML, unknown or repeated keys, missing fields, wrong types,
 ///         axis_H or normal0_H not unit within 1e-6, normal0_H within 60 deg of axis_H,
-///         rad_per_count <= 0, rms_residual_px or counts_used < 0.
+///         rad_per_count <= 0, rms_residual_px or counts_used < 0, point_H or offset_m beyond
+///         0.5 m (the laser is on the head).
 LaserCalibration LoadLaserCalibration(const std::string& path);
+
+/// As LoadLaserCalibration, on the text of such a file (`path` names it in errors).
+LaserCalibration ParseLaserCalibration(const std::string& text, const std::string& path);
 
 /// Writes `c` as YAML with a header comment explaining the fields, every number with 17
 /// significant digits so that LoadLaserCalibration(path) == c exactly. The file is written

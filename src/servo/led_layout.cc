@@ -8,14 +8,13 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "common/yaml_file.h"
 #include "common/yaml_util.h"
 
 namespace hgrasp::servo {
 namespace {
 
-std::string Where(const std::string& path, const YAML::Mark& mark) {
-  return mark.line >= 0 ? path + ":" + std::to_string(mark.line + 1) : path;
-}
+using yaml::Where;
 
 [[noreturn]] void Fail(const std::string& path, const YAML::Node& at, const std::string& field,
                        const std::string& expected) {
@@ -39,6 +38,11 @@ LedLayout ParseSide(const std::string& path, const YAML::Node& node, const std::
       const std::optional<double> x = yaml::ParseNumber(p[k]);
       if (!x) Fail(path, p, f, p_expected);
       v[k] = *x;
+    }
+    if (v.norm() > kMaxLedDistance) {
+      Fail(path, p, f,
+           "an LED on the gripper, within " + std::to_string(int(1e3 * kMaxLedDistance)) +
+               " mm of its frame's origin (the hand is 10 cm across)");
     }
     for (int j = 0; j < layout.size(); ++j) {
       if ((layout.p_E[j] - v).norm() < 1e-3) {
@@ -66,17 +70,12 @@ Eigen::Vector3d LedLayout::Centroid() const {
 }
 
 LedLayouts LoadLedLayouts(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "", "a readable LED layout file");
-  std::stringstream text;
-  text << in.rdbuf();
+  return ParseLedLayouts(yaml::ReadText(path, "a readable LED layout file"), path);
+}
+
+LedLayouts ParseLedLayouts(const std::string& text, const std::string& path) {
   const std::string top_expected = "an LED layout: a map with frame: gripper, left and right";
-  YAML::Node root;
-  try {
-    root = YAML::Load(text.str());
-  } catch (const YAML::Exception& e) {
-    throw InputError(Where(path, e.mark), "", "", "valid YAML (" + e.msg + ")");
-  }
+  const YAML::Node root = yaml::LoadDocument(text, path, top_expected);
   if (!root.IsMap()) throw InputError(path, "", yaml::Render(root), top_expected);
   std::set<std::string> seen;
   for (const auto& kv : root) {

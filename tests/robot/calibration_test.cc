@@ -8,10 +8,13 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "common/error.h"
 #include "common/geometry.h"
 #include "common/paths.h"
+#include "tests/common/yaml_bombs.h"
 
 namespace hgrasp::robot {
 namespace {
@@ -55,7 +58,7 @@ TEST(StereoIntrinsicsTest, FlowStyleAndDistinctCameras) {
   const std::string path = TempPath("hgrasp_cameras_flow.yaml");
   WriteText(path,
             "left: {width: 640, height: 480, fx: 500, fy: 501.5, cx: 319.25, cy: 240}\n"
-            "right: {cy: 10, cx: 20, fy: 30.5, fx: 40, height: 50, width: 60}\n");
+            "right: {cy: 10, cx: 20, fy: 490.5, fx: 490, height: 480, width: 640}\n");
   const StereoIntrinsics s = LoadStereoIntrinsics(path);
   EXPECT_EQ(s.left.width, 640);
   EXPECT_EQ(s.left.height, 480);
@@ -63,10 +66,10 @@ TEST(StereoIntrinsicsTest, FlowStyleAndDistinctCameras) {
   EXPECT_EQ(s.left.fy, 501.5);
   EXPECT_EQ(s.left.cx, 319.25);
   EXPECT_EQ(s.left.cy, 240.0);
-  EXPECT_EQ(s.right.width, 60);
-  EXPECT_EQ(s.right.height, 50);
-  EXPECT_EQ(s.right.fx, 40.0);
-  EXPECT_EQ(s.right.fy, 30.5);
+  EXPECT_EQ(s.right.width, 640);
+  EXPECT_EQ(s.right.height, 480);
+  EXPECT_EQ(s.right.fx, 490.0);
+  EXPECT_EQ(s.right.fy, 490.5);
   EXPECT_EQ(s.right.cx, 20.0);
   EXPECT_EQ(s.right.cy, 10.0);
   fs::remove(path);
@@ -312,6 +315,59 @@ INSTANTIATE_TEST_SUITE_P(
       std::string name = info.param.file;
       return name.substr(0, name.find('.'));
     });
+
+// Hostile and careless files (issue 15): each loaded, or crashed the loader, before.
+TEST(CalibrationHostileTest, CamerasNoRealHeadHasAreRefused) {
+  const std::string good = "{width: 320, height: 240, fx: 230.5, fy: 230.5, cx: 159.5, cy: 119.5}";
+  const struct {
+    std::string left, right, field;
+  } cases[] = {
+      {"{width: 320, height: 240, fx: 230.5, fy: 461, cx: 159.5, cy: 119.5}", good, "left.fy"},
+      {"{width: 320, height: 240, fx: 5, fy: 5, cx: 159.5, cy: 119.5}", good, "left.fx"},
+      {"{width: 320, height: 240, fx: 9000, fy: 9000, cx: 159.5, cy: 119.5}", good, "left.fx"},
+      {good, "{width: 640, height: 480, fx: 461, fy: 461, cx: 319.5, cy: 239.5}", "right"},
+      {good, "{width: 320, height: 240, fx: 300, fy: 300, cx: 159.5, cy: 119.5}", "right.fx"},
+  };
+  for (const auto& c : cases) {
+    try {
+      ParseStereoIntrinsics("left: " + c.left + "\nright: " + c.right + "\n", "cams.yaml");
+      ADD_FAILURE() << "accepted: " << c.left << " / " << c.right;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), c.field) << e.what();
+    }
+  }
+}
+
+TEST(CalibrationHostileTest, LaserOffTheHeadIsRefused) {
+  const std::string text = ReadText(ResolveDataPath("calibration/sim/laser.yaml"));
+  for (const auto& [key, bad] : std::vector<std::pair<std::string, std::string>>{
+           {"point_H:", "point_H: [10, 0, 0]"}, {"offset_m:", "offset_m: 1e300"}}) {
+    std::string changed;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+      changed += (line.rfind(key, 0) == 0 ? bad : line) + "\n";
+    }
+    try {
+      ParseLaserCalibration(changed, "laser.yaml");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), key.substr(0, key.size() - 1)) << e.what();
+    }
+  }
+}
+
+// A self-referencing alias crashed every loader; a billion laughs ran for 40 s in 2 GB.
+TEST(CalibrationHostileTest, AliasBombsAreRefused) {
+  const std::string laughs = testing::BillionLaughs("left", "1");
+  for (const std::string& text : {std::string("left: &n [*n]\n"), laughs,
+                                  std::string("frame: &f {x: *f}\n")}) {
+    const std::string path = TempPath("hgrasp_alias_bomb.yaml");
+    WriteText(path, text);
+    EXPECT_THROW(LoadStereoIntrinsics(path), InputError) << text;
+    EXPECT_THROW(LoadLaserCalibration(path), InputError) << text;
+    fs::remove(path);
+  }
+}
 
 }  // namespace
 }  // namespace hgrasp::robot

@@ -54,6 +54,11 @@ TEST(LedLayout, BadFilesNameTheProblem) {
       {"frame: gripper\nleft: " + good3 + "\nright: [[0, 0, 0], [0.05, 0, x], [0, 0.05, 0]]\n",
        "right[1]"},
       {"frame: gripper\nleft: " + good3 + "\nright: " + good3 + "\nextra: 1\n", "extra"},
+      // Issue 15: an LED 66 m from the gripper loaded; a self-referencing alias crashed.
+      {"frame: gripper\nleft: " + good3 + "\nright: [[0, 0, 0], [66, 0, 0], [0, 0.05, 0]]\n",
+       "within 150 mm"},
+      {"frame: gripper\nleft: &l [*l]\nright: " + good3 + "\n", "alias"},
+      {"frame: !!str gripper\nleft: " + good3 + "\nright: " + good3 + "\n", "tag"},
   };
   int k = 0;
   for (const auto& c : cases) {

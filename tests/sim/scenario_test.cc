@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "common/error.h"
 #include "common/geometry.h"
 #include "common/paths.h"
+#include "tests/common/yaml_bombs.h"
 
 namespace hgrasp::sim {
 namespace {
@@ -420,11 +422,11 @@ TEST(ScenarioTest, MoreBadValues) {
       {"name: t\nobjects: [5]\n", "objects[0]"},
       {"name: t\ninterference: [{origin: [1, 0], sweep_deg: [-1, 1], period_s: 1}]\n",
        "interference[0].origin"},
-      {"name: t\ninterference: [{origin: [1, 0, 0], sweep_deg: [1, 1], period_s: 1}]\n",
+      {"name: t\ninterference: [{origin: [1, 0, 0.5], sweep_deg: [1, 1], period_s: 1}]\n",
        "interference[0].sweep_deg"},
-      {"name: t\ninterference: [{origin: [1, 0, 0], sweep_deg: [-1, 1], period_s: -2}]\n",
+      {"name: t\ninterference: [{origin: [1, 0, 0.5], sweep_deg: [-1, 1], period_s: -2}]\n",
        "interference[0].period_s"},
-      {"name: t\ninterference: [{origin: [1, 0, 0], sweep_deg: [-1, 1]}]\n",
+      {"name: t\ninterference: [{origin: [1, 0, 0.5], sweep_deg: [-1, 1]}]\n",
        "interference[0].period_s"},
       {"name: t\ninterference: {origin: [1, 0, 0]}\n", "interference"},
       {"name: t\ntask: {lift: 0.05}\n", "task.target"},
@@ -473,6 +475,162 @@ TEST(ScenarioTest, SyntaxErrorInFlowStyleNamesTheLine) {
     EXPECT_EQ(e.field(), "YAML syntax");
     EXPECT_EQ(e.file().rfind("flow.yaml:", 0), 0u) << e.what();
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile and careless input (issue 15): each case was accepted, crashed or ran away before.
+
+// A self-referencing alias crashed the loader (unbounded recursion while rendering it).
+TEST(ScenarioHostileTest, SelfReferencingAliasIsRefused) {
+  for (const char* yaml : {"name: &n [*n]\n", "name: t\nobjects: &o [{name: *o}]\n",
+                                 "&m {name: t, devices: *m}\n"}) {
+    const InputError e = ParseError(yaml);
+    EXPECT_NE(std::string(e.what()).find("alias inside the node it names"), std::string::npos)
+        << e.what();
+  }
+}
+
+// Nine levels of nine aliases each: 9^9 values once expanded. Refused by counting, before
+// anything expands them (it took 36-46 s and 2 GB before).
+TEST(ScenarioHostileTest, BillionLaughsIsRefusedByItsSize) {
+  const std::string yaml = testing::BillionLaughs("name", "lol");
+  const InputError e = ParseError(yaml);
+  EXPECT_NE(std::string(e.what()).find("aliases expanded"), std::string::npos) << e.what();
+  EXPECT_LT(std::string(e.what()).size(), 400u) << e.what();
+}
+
+// 5000 nested lists: refused with a short message (it echoed 100-200 kB of brackets).
+TEST(ScenarioHostileTest, DeepNestingGivesAShortMessage) {
+  for (int depth : {40, 5000}) {
+    const std::string yaml = "name: " + std::string(depth, '[') + std::string(depth, ']') + "\n";
+    const InputError e = ParseError(yaml);
+    EXPECT_NE(std::string(e.what()).find("nest"), std::string::npos) << e.what();
+    EXPECT_LT(std::string(e.what()).size(), 400u) << e.what();
+  }
+}
+
+// A tag makes a string of a number: refused, not read as the number.
+TEST(ScenarioHostileTest, TaggedNumberIsRefused) {
+  const InputError e = ParseError("name: t\ncamera_noise: !!str 2.0\n");
+  EXPECT_NE(std::string(e.what()).find("tag"), std::string::npos) << e.what();
+  EXPECT_EQ(e.file(), "inline.yaml:2");
+}
+
+// Values no real table, box, camera or room can have, which loaded before.
+TEST(ScenarioHostileTest, PhysicalRangesWithUnits) {
+  const std::string interference = "name: t\ninterference: [{sweep_deg: [-1, 1], period_s: 1, origin: ";
+  const struct {
+    std::string yaml, field, unit;
+  } cases[] = {
+      {"name: t\ncamera_noise: 1e6\n", "camera_noise", "grey levels"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[1, 0, 0]", ", yaw_deg: 1e9"), "objects[0].yaw_deg",
+       "deg"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[1, 0, 0]", ", mass: 1e30"), "objects[0].mass",
+       "kg"},
+      {OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[1, 0, 0]", ", mass: 0.001"), "objects[0].mass",
+       "kg"},
+      {interference + "[1e300, 0, 0.5]}]\n", "interference[0].origin", "m"},
+      {interference + "[1, 0, -0.2]}]\n", "interference[0].origin", "m"},
+      {"name: t\ninterference: [{origin: [1, 0, 0.5], sweep_deg: [-1e9, 1], period_s: 1}]\n",
+       "interference[0].sweep_deg", "degrees"},
+      {"name: t\ninterference: [{origin: [1, 0, 0.5], sweep_deg: [-1, 1], period_s: 1e9}]\n",
+       "interference[0].period_s", " s"},
+      {"name: t\nwall: {x: 1e300}\n", "wall.x", " m"},
+  };
+  for (const auto& c : cases) {
+    const InputError e = ParseError(c.yaml);
+    EXPECT_EQ(e.field(), c.field) << e.what();
+    EXPECT_NE(std::string(e.what()).find(c.unit), std::string::npos) << e.what();
+  }
+  // The limits themselves are accepted.
+  EXPECT_NO_THROW(ParseScenario("name: t\ncamera_noise: 25\n", "inline.yaml"));
+  EXPECT_NO_THROW(ParseScenario(
+      OneBox("[0.05, 0.05, 0.05]", "[0.3, 0]", "[1, 0, 0]", ", mass: 0.5, yaw_deg: -360"),
+      "inline.yaml"));
+}
+
+// Another robot's laser inside a box lights nothing.
+TEST(ScenarioHostileTest, InterferenceInsideABoxIsRefused) {
+  const std::string yaml = "name: t\nobjects: [{name: a, shape: box, size: [0.1, 0.1, 0.1], "
+                           "position: [0.3, 0], color: [1, 0, 0]}]\ninterference: [{origin: "
+                           "[0.31, 0.02, 0.05], sweep_deg: [-1, 1], period_s: 1}]\n";
+  const InputError e = ParseError(yaml);
+  EXPECT_EQ(e.field(), "interference[0].origin") << e.what();
+  EXPECT_NE(std::string(e.what()).find("objects[0] 'a'"), std::string::npos) << e.what();
+  // Just above it is fine.
+  std::string above = yaml;
+  above.replace(above.find("0.05], sweep"), 4, "0.15");
+  EXPECT_NO_THROW(ParseScenario(above, "inline.yaml"));
+}
+
+// Two spellings of one port, and a symlink to it, are one port (compared by string before).
+TEST(ScenarioHostileTest, PortsAreComparedByTheDeviceTheyOpen) {
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_port_identity";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  { std::ofstream(dir / "ttyS9") << ""; }
+  fs::create_symlink(dir / "ttyS9", dir / "by-id");
+  const std::string port = (dir / "ttyS9").string();
+  for (const std::string& other :
+       {dir.string() + "//ttyS9", dir.string() + "/./ttyS9", (dir / "by-id").string(),
+        std::string("/dev//null")}) {
+    const std::string first = other == "/dev//null" ? "/dev/null" : port;
+    const InputError e = ParseError("name: t\ndevices: {arm_left: {driver: val2, port: " + first +
+                                    "},\n  arm_right: {driver: val2, port: " + other + "}}\n");
+    EXPECT_EQ(e.field(), "devices.arm_right.port") << e.what();
+  }
+  // A port that does not exist yet is compared by its path, made canonical.
+  const InputError e = ParseError(
+      "name: t\ndevices: {arm_left: {driver: val2, port: /nonexistent/ttyX},\n  arm_right: "
+      "{driver: val2, port: /nonexistent//ttyX}}\n");
+  EXPECT_EQ(e.field(), "devices.arm_right.port") << e.what();
+  EXPECT_NO_THROW(ParseScenario("name: t\ndevices: {arm_left: {driver: val2, port: " + port +
+                                    "},\n  arm_right: {driver: val2, port: /dev/null}}\n",
+                                "inline.yaml"));
+  fs::remove_all(dir);
+}
+
+// The laser and the LEDs are one board: one port (accepted at load before, failing later).
+TEST(ScenarioHostileTest, LaserAndLedsOnDifferentPortsAreRefused) {
+  const InputError e = ParseError(
+      "name: t\ndevices: {laser: {driver: laser_board, port: /tmp/a},\n  leds: {driver: "
+      "laser_board, port: /tmp/b}}\n");
+  EXPECT_EQ(e.field(), "devices.leds.port") << e.what();
+  EXPECT_NO_THROW(ParseScenario("name: t\ndevices: {laser: {driver: laser_board, port: /tmp/a},"
+                                "\n  leds: {driver: laser_board, port: /tmp//a}}\n",
+                                "inline.yaml"));
+}
+
+// What no file the project reads can be: a device that never ends, binary data, a huge file.
+TEST(ScenarioHostileTest, FilesThatAreNoScenario) {
+  try {
+    LoadScenario("/dev/zero");
+    ADD_FAILURE() << "/dev/zero loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("character device"), std::string::npos) << e.what();
+  }
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_not_scenarios";
+  fs::create_directories(dir);
+  {
+    std::ofstream(dir / "binary.yaml", std::ios::binary) << std::string("name: ab\0\x01\xff\n", 11);
+    std::ofstream big(dir / "big.yaml");
+    big << "name: t\n";
+    for (int i = 0; i < 70000; ++i) big << "# a comment line of padding\n";
+  }
+  try {
+    LoadScenario((dir / "binary.yaml").string());
+    ADD_FAILURE() << "binary loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("NUL byte at byte 8"), std::string::npos) << e.what();
+  }
+  try {
+    LoadScenario((dir / "big.yaml").string());
+    ADD_FAILURE() << "a 2 MB file loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("more than 1048576 bytes"), std::string::npos)
+        << e.what();
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace
