@@ -30,6 +30,11 @@ class Pty {
   void Reopen();
   bool open() const { return master_ >= 0; }
 
+  /// Whether a pty's link may be put at `path`: nothing is there, or a symlink to a
+  /// pseudo-terminal (/dev/pts/N: a link an emulator made). A file, a folder or any other link
+  /// is never replaced; `why` says what is there.
+  static bool ReplaceableLink(const std::string& path, std::string* why);
+
  private:
   std::string link_path_, slave_path_;
   int master_ = -1, slave_ = -1;

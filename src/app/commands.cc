@@ -9,7 +9,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/output_dir.h"
+#include "app/pictures.h"
 #include "common/error.h"
+#include "common/write_file.h"
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
 #include "sim/truth.h"
@@ -86,6 +89,7 @@ device::StereoFrame GrabWhenSettled(device::RobotDevices& dev) {
 int Render(const RenderOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   sim::Scenario scenario = sim::LoadScenario(o.scenario);  // InputError -> exit 2 in main
+  OutputDir out(o.out_dir);
   Progress("building the world of " + scenario.name);
   sim::SimRobot robot(scenario);
   device::RobotDevices dev = robot.TakeDevices();
@@ -137,13 +141,9 @@ int Render(const RenderOptions& o) {
   truth["seed"] = scenario.seed;
   truth["renderer"] = robot.rig().renderer().DeviceDescription();
 
-  // Everything computed: now write, so a failure leaves no half-written output.
-  fs::create_directories(o.out_dir);
-  for (const Output& out : outputs) {
-    const std::string path = (fs::path(o.out_dir) / out.name).string();
-    if (!cv::imwrite(path, out.image)) throw std::runtime_error("cannot write " + path);
-  }
-  std::ofstream(fs::path(o.out_dir) / "truth.json") << truth.dump(2) << "\n";
+  for (const Output& output : outputs) WritePng(output.image, out.Path(output.name));
+  WriteFileWhole(out.Path("truth.json"), truth.dump(2) + "\n");
+  out.Commit();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   spdlog::info("render: {} images and truth.json in {} ({:.2f} s)", outputs.size(), o.out_dir,
                wall);

@@ -3,6 +3,7 @@
 /// failed, 2 bad input or usage (DESIGN.md, "The command").
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -76,8 +77,13 @@ struct EmulateOptions {
   std::string device;          ///< val2, biclops, sensorhand or laser_board
   std::string side = "right";  ///< val2: which arm's controller (its kinematics)
   std::string link;            ///< optional stable path: a symlink to the pty
-  double seconds = 0.0;        ///< > 0: stop after this long (else at SIGINT / SIGTERM)
+  /// Stop after this long (s; positive, finite, at most kMaxEmulateSeconds); without it, at
+  /// SIGINT or SIGTERM.
+  std::optional<double> seconds;
 };
+
+/// Longest --seconds (s): about 11.6 days.
+inline constexpr double kMaxEmulateSeconds = 1e6;
 
 /// `hgrasp emulate`: serves one device emulator on a pseudo-terminal and prints the port's path
 /// (the link when given) on stdout.

@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <thread>
 
@@ -36,6 +37,13 @@ int Emulate(const EmulateOptions& o) {
   if (o.side != "left" && o.side != "right") {
     throw InputError("", "--side", o.side, "left or right");
   }
+  if (o.seconds && !(std::isfinite(*o.seconds) && *o.seconds > 0.0 &&
+                     *o.seconds <= kMaxEmulateSeconds)) {
+    char value[32];
+    std::snprintf(value, sizeof value, "%g", *o.seconds);
+    throw InputError("", "--seconds", value,
+                     "a time in seconds, > 0 and at most 1e6 (leave it out to serve until Ctrl-C)");
+  }
   std::unique_ptr<drivers::DeviceEmulator> device = MakeEmulator(o);
   // Block the stop signals before any thread starts, then wait for one of them.
   sigset_t stop;
@@ -52,10 +60,17 @@ int Emulate(const EmulateOptions& o) {
   }
   std::printf("%s\n", host->port().c_str());
   std::fflush(stdout);
-  if (o.seconds > 0.0) {
-    const timespec wait{static_cast<time_t>(o.seconds),
-                        static_cast<long>((o.seconds - static_cast<time_t>(o.seconds)) * 1e9)};
-    sigtimedwait(&stop, nullptr, &wait);
+  if (o.seconds) {
+    // Until the time is up or a stop signal comes (sigtimedwait may return early: EINTR).
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(*o.seconds);
+    for (;;) {
+      const double left =
+          std::chrono::duration<double>(end - std::chrono::steady_clock::now()).count();
+      if (left <= 0.0) break;
+      const auto whole = static_cast<time_t>(left);
+      const timespec wait{whole, static_cast<long>((left - static_cast<double>(whole)) * 1e9)};
+      if (sigtimedwait(&stop, nullptr, &wait) >= 0) break;  // a stop signal
+    }
   } else {
     int sig = 0;
     sigwait(&stop, &sig);

@@ -4,10 +4,61 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <charconv>
 #include <cstdio>
+#include <string>
+#include <system_error>
+#include <vector>
 
 #include "app/commands.h"
 #include "common/error.h"
+
+namespace {
+
+// The message for the first word of the command line that should name a command (or a
+// subcommand of one) and names none; empty when every such word is known. Options and their
+// values are left to CLI11.
+std::string UnknownCommand(const CLI::App& app, int argc, char** argv) {
+  const CLI::App* level = &app;
+  std::string path = "hgrasp";
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') return "";  // an option (--help, ...): CLI11's
+    const std::vector<const CLI::App*> subs = level->get_subcommands({});
+    if (subs.empty()) return "";
+    const CLI::App* next = nullptr;
+    std::string names;
+    for (const CLI::App* sub : subs) {
+      if (sub->check_name(word)) next = sub;
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (next == nullptr) {
+      return path + ": '" + word + "' is no command; expected one of: " + names +
+             " (hgrasp --help lists them)";
+    }
+    level = next;
+    path += " " + word;
+  }
+  return "";
+}
+
+// --encoder's values: integer encoder counts.
+std::vector<std::int32_t> EncoderCounts(const std::vector<std::string>& text) {
+  std::vector<std::int32_t> counts;
+  for (const std::string& s : text) {
+    std::int32_t v = 0;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (s.empty() || ec != std::errc() || end != s.data() + s.size()) {
+      throw hgrasp::InputError("", "--encoder", s,
+                               "an integer laser encoder count (0.01 deg per count, e.g. -500 0 "
+                               "500; the laser reaches about +-4500)");
+    }
+    counts.push_back(v);
+  }
+  return counts;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"hgrasp: a humanoid that scans, models and grasps boxes it has never seen"};
@@ -20,8 +71,10 @@ int main(int argc, char** argv) {
                          "labels and ground truth from the simulated robot");
   cmd_render->add_option("scenario", render.scenario, "scenario YAML file")->required();
   cmd_render->add_option("--out", render.out_dir, "output directory")->required();
-  cmd_render->add_option("--encoder", render.encoder_counts,
-                         "laser encoder counts to render the stripe at (0.01 deg/count)");
+  std::vector<std::string> encoder_text;  // parsed below, so a bad one is named with its range
+  cmd_render->add_option("--encoder", encoder_text,
+                         "laser encoder counts to render the stripe at (0.01 deg/count)")
+      ->type_name("COUNT");
 
   hgrasp::app::CalibrateLaserOptions calibrate;
   CLI::App* cmd_calibrate = app.add_subcommand("calibrate", "Self-calibration");
@@ -86,8 +139,16 @@ int main(int argc, char** argv) {
   cmd_emulate->add_option("--side", emulate.side, "val2: the left or right arm (default right)");
   cmd_emulate->add_option("--link", emulate.link,
                           "also make this path a symlink to the port (stable across restarts)");
-  cmd_emulate->add_option("--seconds", emulate.seconds, "stop after this many seconds");
+  double emulate_seconds = 0.0;
+  CLI::Option* emulate_seconds_option = cmd_emulate->add_option(
+      "--seconds", emulate_seconds, "stop after this many seconds (> 0; default: at Ctrl-C)");
 
+  // A word where a command belongs that names none: said with the word and the commands (CLI11
+  // would say only that a subcommand is required, or show the main help for `WORD --help`).
+  if (const std::string unknown = UnknownCommand(app, argc, argv); !unknown.empty()) {
+    std::fprintf(stderr, "%s\n", unknown.c_str());
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -95,13 +156,19 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   try {
-    if (*cmd_render) return hgrasp::app::Render(render);
+    if (*cmd_render) {
+      if (!encoder_text.empty()) render.encoder_counts = EncoderCounts(encoder_text);
+      return hgrasp::app::Render(render);
+    }
     if (*cmd_calibrate_laser) return hgrasp::app::CalibrateLaser(calibrate);
     if (*cmd_scan) return hgrasp::app::Scan(scan);
     if (*cmd_model) return hgrasp::app::Model(model);
     if (*cmd_plan) return hgrasp::app::Plan(plan);
     if (*cmd_run) return hgrasp::app::Run(run);
-    if (*cmd_emulate) return hgrasp::app::Emulate(emulate);
+    if (*cmd_emulate) {
+      if (emulate_seconds_option->count() > 0) emulate.seconds = emulate_seconds;
+      return hgrasp::app::Emulate(emulate);
+    }
   } catch (const hgrasp::InputError& e) {
     std::fprintf(stderr, "hgrasp: %s\n", e.what());
     return 2;

@@ -12,7 +12,10 @@
 #include "app/commands.h"
 #include "app/devices.h"
 #include "app/look_report.h"
+#include "app/output_dir.h"
 #include "app/pictures.h"
+#include "common/write_file.h"
+#include "common/error.h"
 #include "common/paths.h"
 #include "grasp/grasp_planner.h"
 #include "model/box_fit.h"
@@ -147,7 +150,6 @@ nlohmann::json LookReport(const sim::Scenario& scenario, sim::SimRobot* robot,
     report["truth"] = truth;
   }
 
-  fs::create_directories(out_dir);
   const fs::path out(out_dir);
   scan::WritePly(scan.range, (out / "range.ply").string());
   scan::WriteRangePng(scan.range, (out / "range.png").string());
@@ -202,12 +204,20 @@ const sim::SimObject* TargetObject(const sim::World& world, const model::BoxMode
 }
 
 task::TaskConfig TaskConfigFor(const sim::Scenario& scenario) {
-  task::TaskConfig config;
-  if (scenario.task) {
-    config.target_color = scenario.task->target_color;
-    config.target_name = scenario.task->target_name;
-    config.lift_m = scenario.task->lift_m;
+  if (!scenario.task) {
+    throw InputError(scenario.path, "task", "",
+                     "a task naming the target, e.g. task: {target: {color: yellow}} (model, plan "
+                     "and run look for it)");
   }
+  if (scenario.task->target_color.empty() && !model::ColourOfName(scenario.task->target_name)) {
+    throw InputError(scenario.path, "task.target.name", scenario.task->target_name,
+                     "a target whose name says its colour (e.g. yellow_box), or task.target.color: "
+                     "the robot knows objects only by what it sees");
+  }
+  task::TaskConfig config;
+  config.target_color = scenario.task->target_color;
+  config.target_name = scenario.task->target_name;
+  config.lift_m = scenario.task->lift_m;
   return config;
 }
 
@@ -217,14 +227,16 @@ namespace {
 int LookAndPlan(const ModelOptions& o, bool plan) {
   const auto t0 = Clock::now();
   const sim::Scenario scenario = sim::LoadScenario(o.scenario);
+  const task::TaskConfig config = TaskConfigFor(scenario);
   task::RobotModel robot_model = task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
+  OutputDir out(o.out_dir);
   sim::SimRobot robot(scenario);
   device::RobotDevices dev = MakeDevices(scenario, &robot);
-  task::GraspTask task(&dev, robot_model, TaskConfigFor(scenario));
+  task::GraspTask task(&dev, robot_model, config);
   const bool ok = task.Look() && (!plan || task.Plan());
   const task::TaskResult& r = task.result();
   nlohmann::json report = LookReport(scenario, AllSimulated(scenario) ? &robot : nullptr, r,
-                                     robot_model, plan, o.out_dir);
+                                     robot_model, plan, out.staging());
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
   nlohmann::json timing = {{"total", Seconds(t0)}};
@@ -235,8 +247,8 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   }
   if (plan && r.stages.size() > 1) timing["plan"] = r.stages[1].wall_s;
   report["timing_s"] = timing;
-  fs::create_directories(o.out_dir);
-  std::ofstream(fs::path(o.out_dir) / "report.json") << report.dump(2) << "\n";
+  WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
+  out.Commit();
   spdlog::info("{}: total {:.2f} s; wrote {}", plan ? "plan" : "model", Seconds(t0), o.out_dir);
   if (!ok) spdlog::warn("{}: {}", plan ? "plan" : "model", r.message);
   return ok ? 0 : 1;

@@ -14,7 +14,9 @@
 #include "app/commands.h"
 #include "app/devices.h"
 #include "app/look_report.h"
+#include "app/output_dir.h"
 #include "app/pictures.h"
+#include "common/write_file.h"
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
 #include "sim/truth.h"
@@ -64,13 +66,14 @@ nlohmann::json ErrorJson(const servo::ServoError& e) {
 int Run(const RunOptions& o) {
   const auto t0 = Clock::now();
   const sim::Scenario scenario = sim::LoadScenario(o.scenario);
+  const task::TaskConfig config = TaskConfigFor(scenario);
   const task::RobotModel robot_model =
       task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
+  OutputDir out_dir(o.out_dir);
   sim::SimRobot robot(scenario);
   device::RobotDevices dev = MakeDevices(scenario, &robot);
   const bool sim_truth = AllSimulated(scenario);
-  fs::create_directories(o.out_dir);
-  const fs::path out(o.out_dir);
+  const fs::path out(out_dir.staging());
 
   cv::VideoWriter video;
   if (o.video) {
@@ -106,7 +109,7 @@ int Run(const RunOptions& o) {
                                              {"gripper_to_plan_deg", RadToDeg(e.rotation_rad)}};
     }
   };
-  task::GraspTask task(&dev, robot_model, TaskConfigFor(scenario), sink);
+  task::GraspTask task(&dev, robot_model, config, sink);
   task_ptr = &task;
   // The target object's true height before anything touches it (truth only).
   std::optional<double> z0;
@@ -121,7 +124,7 @@ int Run(const RunOptions& o) {
   const task::TaskResult& r = task.result();
 
   nlohmann::json report =
-      LookReport(scenario, sim_truth ? &robot : nullptr, r, robot_model, true, o.out_dir);
+      LookReport(scenario, sim_truth ? &robot : nullptr, r, robot_model, true, out_dir.staging());
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
@@ -168,7 +171,9 @@ int Run(const RunOptions& o) {
     }
     report["truth"]["run"] = truth_run;
   }
-  std::ofstream(out / "report.json") << report.dump(2) << "\n";
+  if (video.isOpened()) video.release();
+  WriteFileWhole(out_dir.Path("report.json"), report.dump(2) + "\n");
+  out_dir.Commit();
 
   std::string servo;
   for (const task::ServoPhase& p : r.servo) {

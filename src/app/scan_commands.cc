@@ -11,7 +11,9 @@
 
 #include "app/commands.h"
 #include "app/devices.h"
+#include "app/output_dir.h"
 #include "common/paths.h"
+#include "common/write_file.h"
 #include "robot/calibration.h"
 #include "robot/head_kinematics.h"
 #include "scan/range_io.h"
@@ -44,20 +46,25 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   device::RobotDevices dev = MakeDevices(scenario, &robot);
   scan::LaserCalibrationReport report;
   const scan::SweepConfig sweep;
-  const robot::LaserCalibration cal = scan::CalibrateLaser(dev, head, cameras, sweep, {}, &report);
-
+  const std::optional<robot::LaserCalibration> calibrated =
+      scan::CalibrateLaser(dev, head, cameras, sweep, {}, &report);
+  if (!calibrated) {
+    // Nothing is written: a calibration below its stated quality, or none at all.
+    spdlog::error("calibrate laser: {}{}; {} not written", report.failed_device.empty() ? "" : "device_error: ",
+                  report.failure, o.out_file);
+    return 1;
+  }
+  const robot::LaserCalibration& cal = *calibrated;
   fs::path out(o.out_file);
   if (out.has_parent_path()) fs::create_directories(out.parent_path());
   robot::SaveLaserCalibration(cal, o.out_file);
-  spdlog::info(
-      "calibrate laser: {} of {} stripe positions used, eq. 5 residue RMS {:.3f} px; wrote {} "
-      "({:.1f} s)",
-      report.counts_used, report.frames, report.rms_residue_px, o.out_file, Seconds(t0));
+  spdlog::info("calibrate laser: {}; wrote {} ({:.1f} s)", report.Figures(), o.out_file,
+               Seconds(t0));
   if (!AllSimulated(scenario)) return 0;
 
   // Ground truth: the calibrated plane against the simulator's at every count of the sweep.
   device::HeadState hs;
-  dev.head->Read(&hs);
+  if (dev.head->Read(&hs) != device::Status::kOk) return 0;  // written; no truth to add
   const Pose3 X_WH = head.X_WH(hs.q);
   const std::int32_t lo = std::min(sweep.start_count, sweep.end_count);
   const std::int32_t hi = std::max(sweep.start_count, sweep.end_count);
@@ -75,6 +82,7 @@ int Scan(const ScanOptions& o) {
   const sim::Scenario scenario = sim::LoadScenario(o.scenario);
   const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
   const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
+  OutputDir out(o.out_dir);
   sim::SimRobot robot(scenario);
   device::RobotDevices dev = MakeDevices(scenario, &robot);
   scan::StripeFrameConfig config;
@@ -117,10 +125,10 @@ int Scan(const ScanOptions& o) {
                     {"mode", o.single_camera ? "single_camera" : "stereo"}};
   if (AllSimulated(scenario)) report["truth"] = truth;  // what the devices saw is the sim's
 
-  fs::create_directories(o.out_dir);
-  scan::WritePly(result.range, (fs::path(o.out_dir) / "range.ply").string());
-  scan::WriteRangePng(result.range, (fs::path(o.out_dir) / "range.png").string());
-  std::ofstream(fs::path(o.out_dir) / "report.json") << report.dump(2) << "\n";
+  scan::WritePly(result.range, out.Path("range.ply"));
+  scan::WriteRangePng(result.range, out.Path("range.png"));
+  WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
+  out.Commit();
   spdlog::info(
       "scan: {} points, {} rejected rows; to the true surfaces RMS {:.3f} mm, median "
       "{:.3f} mm, 99th percentile {:.3f} mm, {} beyond 5 mm; scan {:.2f} s, total {:.2f} "

@@ -10,33 +10,12 @@
 #include <string_view>
 
 #include "common/error.h"
+#include "common/write_file.h"
 
 namespace hgrasp::model {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// Writes `text` to a file beside `path`, then renames it to `path`, so that the file appears
-/// whole or not at all. Throws std::runtime_error naming `path`.
-void WriteWhole(const fs::path& path, std::string_view text) {
-  const fs::path tmp = path.string() + ".part";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error(path.string() + ": cannot open for writing");
-    f.write(text.data(), static_cast<std::streamsize>(text.size()));
-    f.close();
-    if (!f) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error(path.string() + ": write failed");
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path.string() + ": cannot move the written file into place");
-  }
-}
 
 void WritePng(const fs::path& path, const cv::Mat& image) {
   std::vector<uchar> png;
@@ -47,7 +26,7 @@ void WritePng(const fs::path& path, const cv::Mat& image) {
     throw std::runtime_error(path.string() + ": PNG encoding failed: " + e.what());
   }
   if (!ok) throw std::runtime_error(path.string() + ": PNG encoding failed");
-  WriteWhole(path, {reinterpret_cast<const char*>(png.data()), png.size()});
+  WriteFileWhole(path.string(), {reinterpret_cast<const char*>(png.data()), png.size()});
 }
 
 }  // namespace
@@ -133,8 +112,8 @@ void WriteObj(const std::vector<BoxModel>& boxes,
     }
   }
   const fs::path base = fs::path(dir) / stem;
-  WriteWhole(base.string() + ".mtl", mtl.str());
-  WriteWhole(base.string() + ".obj", obj.str());
+  WriteFileWhole(base.string() + ".mtl", mtl.str());
+  WriteFileWhole(base.string() + ".obj", obj.str());
 }
 
 }  // namespace hgrasp::model

@@ -14,6 +14,8 @@
 #include <string_view>
 #include <vector>
 
+#include "common/write_file.h"
+
 namespace hgrasp::scan {
 namespace {
 
@@ -36,26 +38,6 @@ void PasteX2(const cv::Mat& small, cv::Mat* dst, int x0) {
   cv::Mat big;
   cv::resize(small, big, cv::Size(), 2.0, 2.0, cv::INTER_NEAREST);
   big.copyTo((*dst)(cv::Rect(x0, 0, big.cols, big.rows)));
-}
-
-// Writes `parts` one after another to a file beside `path`, then renames it to `path`, so that
-// the file appears whole or not at all. Throws std::runtime_error naming `path`.
-void WriteWhole(const std::string& path, std::initializer_list<std::string_view> parts) {
-  const std::string tmp = path + ".part";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error(path + ": cannot open for writing");
-    for (std::string_view p : parts) f.write(p.data(), static_cast<std::streamsize>(p.size()));
-    f.close();
-    if (!f) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error(path + ": write failed");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot move the written file into place");
-  }
 }
 
 }  // namespace
@@ -85,7 +67,9 @@ void WritePly(const RangeImage& r, const std::string& path) {
       "property uchar green\n"
       "property uchar blue\n"
       "end_header\n";
-  WriteWhole(path, {std::string_view(header), std::string_view(body.data(), body.size())});
+  std::string bytes = header;
+  bytes.append(body.data(), body.size());
+  WriteFileWhole(path, bytes);
 }
 
 cv::Mat RangePreview(const RangeImage& r) {
@@ -132,7 +116,7 @@ void WriteRangePng(const RangeImage& r, const std::string& path) {
   if (preview.empty()) throw std::runtime_error(path + ": the range image is empty");
   std::vector<uchar> png;
   if (!cv::imencode(".png", preview, png)) throw std::runtime_error(path + ": PNG encoding failed");
-  WriteWhole(path, {{reinterpret_cast<const char*>(png.data()), png.size()}});
+  WriteFileWhole(path, {reinterpret_cast<const char*>(png.data()), png.size()});
 }
 
 }  // namespace hgrasp::scan

@@ -1,6 +1,8 @@
 #include "scan/scanner.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <set>
 
@@ -13,14 +15,23 @@ namespace {
 constexpr double kFramePeriodS = 0.04;    // PAL, 25 frames/s
 constexpr double kSlewCountsPerS = 9000;  // fast move to the start of a sweep
 
-// Grabs frames until the laser stops; the last frame has it at rest.
-device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* frame) {
+// Grabs frames until the laser stops; the last frame has it at rest. `failed`: the device whose
+// status ended it.
+device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* frame,
+                            std::string* failed) {
   device::StripeLaserState s;
   for (int i = 0; i < 1000; ++i) {
-    if (const auto st = dev.cameras->Grab(frame); st != device::Status::kOk) return st;
-    if (const auto st = dev.laser->Read(&s); st != device::Status::kOk) return st;
+    if (const auto st = dev.cameras->Grab(frame); st != device::Status::kOk) {
+      *failed = "cameras";
+      return st;
+    }
+    if (const auto st = dev.laser->Read(&s); st != device::Status::kOk) {
+      *failed = "laser";
+      return st;
+    }
     if (!s.moving) return device::Status::kOk;
   }
+  *failed = "laser";
   return device::Status::kTimeout;
 }
 
@@ -42,24 +53,50 @@ std::optional<Eigen::Vector3f> Colour(const cv::Mat& bgr, double u, double v) {
 }  // namespace
 
 device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
-                     const std::function<void(const device::StereoFrame&)>& on_frame) {
+                     const std::function<void(const device::StereoFrame&)>& on_frame,
+                     std::string* failed_device) {
   HGRASP_DEMAND(sweep.positions > 1 && sweep.end_count != sweep.start_count);
+  std::string ignored;
+  std::string* failed = failed_device != nullptr ? failed_device : &ignored;
   device::StereoFrame frame;
   if (auto st = dev.laser->MoveTo(sweep.start_count, kSlewCountsPerS); st != device::Status::kOk) {
+    *failed = "laser";
     return st;
   }
-  if (auto st = WaitForLaser(dev, &frame); st != device::Status::kOk) return st;
+  if (auto st = WaitForLaser(dev, &frame, failed); st != device::Status::kOk) return st;
   const double speed =
       std::abs(sweep.end_count - sweep.start_count) / (sweep.positions * kFramePeriodS);
-  if (auto st = dev.laser->MoveTo(sweep.end_count, speed); st != device::Status::kOk) return st;
+  if (auto st = dev.laser->MoveTo(sweep.end_count, speed); st != device::Status::kOk) {
+    *failed = "laser";
+    return st;
+  }
   device::StripeLaserState s;
   for (int i = 0; i < 4 * sweep.positions; ++i) {
-    if (auto st = dev.cameras->Grab(&frame); st != device::Status::kOk) return st;
+    if (auto st = dev.cameras->Grab(&frame); st != device::Status::kOk) {
+      *failed = "cameras";
+      return st;
+    }
     on_frame(frame);
-    if (auto st = dev.laser->Read(&s); st != device::Status::kOk) return st;
+    if (auto st = dev.laser->Read(&s); st != device::Status::kOk) {
+      *failed = "laser";
+      return st;
+    }
     if (!s.moving) break;
   }
   return device::Status::kOk;
+}
+
+void CheckFrameSize(const robot::StereoIntrinsics& cameras, const device::StereoFrame& frame) {
+  const auto check = [&](const PinholeCamera& c, const cv::Mat& image, const char* side) {
+    if (image.cols == c.width && image.rows == c.height) return;
+    throw InputError(cameras.path, std::string(side) + ".width, " + side + ".height",
+                     std::to_string(c.width) + " x " + std::to_string(c.height),
+                     "the size of the " + std::string(side) + " camera's frames, " +
+                         std::to_string(image.cols) + " x " + std::to_string(image.rows) +
+                         " pixels (a calibration of another camera or resolution?)");
+  };
+  check(cameras.left, frame.left, "left");
+  check(cameras.right, frame.right, "right");
 }
 
 Scanner::Scanner(robot::HeadKinematics head, robot::StereoIntrinsics cameras,
@@ -116,6 +153,7 @@ ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
   device::StereoFrame ambient;
   dev.laser->SetLaser(false);
   dev.cameras->Grab(&ambient);
+  CheckFrameSize(cameras_, ambient);
   out.ambient_left = ambient.left.clone();
   std::vector<device::StereoFrame> frames;
   dev.laser->SetLaser(true);
@@ -132,12 +170,41 @@ ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
   return out;
 }
 
-robot::LaserCalibration CalibrateLaser(device::RobotDevices& dev, const robot::HeadKinematics& head,
-                                       const robot::StereoIntrinsics& cameras,
-                                       const SweepConfig& sweep, StripeFrameConfig config,
-                                       LaserCalibrationReport* report) {
+std::string LaserCalibrationReport::Figures() const {
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "%d of %d stripe positions determined a plane, %d consistent, spanning %.0f%% of "
+                "the sweep; residue RMS %.3f px, points %.3f mm RMS and planes %.3f deg (median) from "
+                "the model",
+                counts_fitted, frames, counts_used, 100.0 * span_fraction, rms_residue_px,
+                rms_point_mm, median_plane_deg);
+  return text;
+}
+
+std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
+                                                      const robot::HeadKinematics& head,
+                                                      const robot::StereoIntrinsics& cameras,
+                                                      const SweepConfig& sweep,
+                                                      StripeFrameConfig config,
+                                                      LaserCalibrationReport* report_out,
+                                                      const LaserCalibrationQuality& quality) {
+  LaserCalibrationReport ignored;
+  LaserCalibrationReport& report = report_out != nullptr ? *report_out : ignored;
+  report = {};
+  const auto device_failed = [&](const std::string& device, device::Status st) {
+    report.failed_device = device;
+    report.status = st;
+    report.failure = device + ": " + std::string(device::ToString(st));
+    return std::nullopt;
+  };
+  const auto below = [&](const std::string& why) {
+    report.failure = why + " (" + report.Figures() + ")";
+    return std::nullopt;
+  };
   device::HeadState hs;
-  dev.head->Read(&hs);
+  if (const auto st = dev.head->Read(&hs); st != device::Status::kOk) {
+    return device_failed("head", st);
+  }
   const double verge = hs.q.verge;
   const Pose3 X_CLCR = head.X_HC(0, verge).inverse() * head.X_HC(1, verge);
   const Rectification rect = MakeRectification(cameras.left, cameras.right, X_CLCR);
@@ -147,8 +214,13 @@ robot::LaserCalibration CalibrateLaser(device::RobotDevices& dev, const robot::H
   std::vector<std::pair<std::int32_t, std::vector<Eigen::Vector3d>>> observations;
   std::vector<CountedPoint> points_H;
   int frames = 0;
-  dev.laser->SetLaser(true);
-  Sweep(dev, sweep, [&](const device::StereoFrame& f) {
+  bool size_checked = false;
+  if (const auto st = dev.laser->SetLaser(true); st != device::Status::kOk) {
+    return device_failed("laser", st);
+  }
+  std::string failed;
+  const device::Status swept = Sweep(dev, sweep, [&](const device::StereoFrame& f) {
+    if (!size_checked) CheckFrameSize(cameras, f), size_checked = true;
     ++frames;
     processor.Rectify(f.left, f.right);
     std::vector<std::vector<Eigen::Vector3d>> rows;
@@ -172,12 +244,15 @@ robot::LaserCalibration CalibrateLaser(device::RobotDevices& dev, const robot::H
                           X_HM * rect.Triangulate(pairs[i].x(), pairs[i].y(), pairs[i].z())});
     }
     observations.emplace_back(f.laser_encoder_count, std::move(pairs));
-  });
-  dev.laser->SetLaser(false);
+  }, &failed);
+  const device::Status off = dev.laser->SetLaser(false);
+  if (swept != device::Status::kOk) return device_failed(failed, swept);
+  if (off != device::Status::kOk) return device_failed("laser", off);
+  report.frames = frames;
+  report.counts_fitted = static_cast<int>(planes_H.size());
   if (planes_H.size() < 3) {
-    throw std::runtime_error("laser calibration: only " + std::to_string(planes_H.size()) + " of " +
-                             std::to_string(frames) +
-                             " stripe positions fell on a non-planar target");
+    return below("only " + std::to_string(planes_H.size()) + " of " + std::to_string(frames) +
+                 " stripe positions fell on a non-planar target");
   }
   // Robustly: counts whose plane disagrees with a first model (a stripe off the target, a wrong
   // pair of candidates) are dropped, then the model is refined on the points of the rest, twice,
@@ -208,16 +283,19 @@ robot::LaserCalibration CalibrateLaser(device::RobotDevices& dev, const robot::H
       kept_counts.insert(planes_H[i].first);
     }
   }
+  report.counts_used = static_cast<int>(consistent.size());
   if (consistent.size() < 3) {
-    throw std::runtime_error(
-        "laser calibration: the stripe planes do not turn smoothly with the "
-        "encoder; is the head still and the target non-planar?");
+    return below(
+        "the stripe planes do not turn smoothly with the encoder; is the head still and the "
+        "target non-planar?");
   }
   robot::LaserCalibration cal = FitRotatingPlane(consistent);
   std::erase_if(points_H, [&](const CountedPoint& p) { return !kept_counts.count(p.count); });
+  double rms_point_m = 0;
   for (int pass = 0; pass < 3; ++pass) {
     double rms = 0;
     cal = RefineOnPoints(cal, points_H, &rms);
+    rms_point_m = rms;
     std::vector<CountedPoint> kept;
     for (const CountedPoint& p : points_H) {
       if (std::abs(cal.PlaneH(p.count).SignedDistance(p.p_H)) < 3 * rms) kept.push_back(p);
@@ -237,7 +315,33 @@ robot::LaserCalibration CalibrateLaser(device::RobotDevices& dev, const robot::H
     }
   }
   cal.rms_residual_px = n > 0 ? std::sqrt(sum2 / n) : 0.0;
-  if (report != nullptr) *report = {frames, cal.counts_used, cal.rms_residual_px};
+
+  // The calibration's own quality: coverage of the sweep, and how well the model explains the
+  // per-count planes and the points.
+  const auto [lo, hi] = std::minmax_element(
+      consistent.begin(), consistent.end(),
+      [](const auto& a, const auto& b) { return a.first < b.first; });
+  report.span_fraction = static_cast<double>(hi->first - lo->first) /
+                         std::abs(sweep.end_count - sweep.start_count);
+  report.rms_residue_px = cal.rms_residual_px;
+  report.rms_point_mm = 1e3 * rms_point_m;
+  std::vector<double> plane_deg;
+  for (const auto& [count, plane] : consistent) {
+    const double c = std::abs(plane.n.dot(cal.PlaneH(count).n));
+    plane_deg.push_back(RadToDeg(std::acos(std::min(1.0, c))));
+  }
+  std::nth_element(plane_deg.begin(), plane_deg.begin() + plane_deg.size() / 2, plane_deg.end());
+  report.median_plane_deg = plane_deg[plane_deg.size() / 2];
+  const double fitted = static_cast<double>(report.counts_fitted) / std::max(1, frames);
+  if (fitted < quality.min_fitted_fraction || report.span_fraction < quality.min_span_fraction) {
+    return below("too few stripe positions fell on a non-planar target: the sweep needs one "
+                 "across its whole width (e.g. scenarios/calibration_target.yaml)");
+  }
+  if (report.rms_residue_px > quality.max_rms_residue_px ||
+      report.rms_point_mm > quality.max_rms_point_mm ||
+      report.median_plane_deg > quality.max_median_plane_deg) {
+    return below("the rotating-plane model does not fit the stripes");
+  }
   return cal;
 }
 

@@ -6,6 +6,8 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
+#include <string>
 #include <opencv2/core/mat.hpp>
 
 #include "device/robot_devices.h"
@@ -33,9 +35,15 @@ struct ScanResult {
 
 /// Runs the laser from sweep.start_count to sweep.end_count at constant speed (laser already
 /// on or off as the caller set it) and calls `on_frame` for every frame grabbed while it moves.
-/// Returns the device status that ended it early, or kOk.
+/// Returns the device status that ended it early, or kOk; `failed_device` (when given) is then
+/// set to the device that said it ("laser" or "cameras").
 device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
-                     const std::function<void(const device::StereoFrame&)>& on_frame);
+                     const std::function<void(const device::StereoFrame&)>& on_frame,
+                     std::string* failed_device = nullptr);
+
+/// Checks that the intrinsics describe cameras of the frames' size.
+/// @throws hgrasp::InputError naming the intrinsics file (cameras.path), the sizes of both.
+void CheckFrameSize(const robot::StereoIntrinsics& cameras, const device::StereoFrame& frame);
 
 class Scanner {
  public:
@@ -75,17 +83,48 @@ class Scanner {
   std::map<double, std::unique_ptr<StripeFrameProcessor>> processors_;
 };
 
+/// The quality a laser calibration must reach to be written (hgrasp calibrate laser refuses a
+/// result below it, exit 1 with the figures). Measured in the sim: over the calibration target
+/// (two steps across the whole sweep, scenarios/calibration_target.yaml) at camera noise 0, 2
+/// and 5, residue 0.088-0.115 px, points 0.100-0.138 mm, median plane angle 0.033-0.052 deg
+/// (and the calibrated planes within 0.016 deg / 0.08 mm of the truth); over scenes that are no
+/// target (the default's two boxes: most stripe positions on the table alone; a box before a
+/// wall; the interference scene), median plane angles of 5.3-51 deg, which the model alone
+/// would have written as a plane 45 deg from the truth.
+struct LaserCalibrationQuality {
+  double min_fitted_fraction = 0.6;  ///< frames whose stripe determined a plane, of all frames
+  double min_span_fraction = 0.8;    ///< the counts used span this much of the sweep
+  double max_rms_residue_px = 0.25;  ///< eq. 5 residue RMS over every pair, after the model fit
+  double max_rms_point_mm = 0.5;     ///< stripe points' RMS distance from the model's planes
+  double max_median_plane_deg = 0.2;  ///< per-count planes' median angle from the model's
+};
+
 struct LaserCalibrationReport {
-  int frames = 0;             ///< frames in the sweep
-  int counts_used = 0;        ///< frames whose stripe determined a plane
-  double rms_residue_px = 0;  ///< eq. 5 residue over all pairs used, after the model fit
+  int frames = 0;              ///< frames in the sweep
+  int counts_fitted = 0;       ///< frames whose stripe determined a plane (eq. 6)
+  int counts_used = 0;         ///< of those, the planes consistent with their neighbours
+  double span_fraction = 0;    ///< the counts used span this fraction of the sweep's counts
+  double rms_residue_px = 0;   ///< eq. 5 residue over all pairs used, after the model fit
+  double rms_point_mm = 0;     ///< stripe points' RMS distance from the model's planes (mm)
+  double median_plane_deg = 0;  ///< per-count planes' median angle from the model's (deg)
+  std::string failed_device;   ///< set when a device's status ended the calibration
+  device::Status status = device::Status::kOk;  ///< that status
+  std::string failure;  ///< empty when a calibration was made at the stated quality; else why
+
+  /// The figures in one line, for logs and messages.
+  std::string Figures() const;
 };
 
 /// Self-calibration: sweeps the laser over a non-planar target, fits eq. 6 per encoder count and
-/// the rotating-plane model over all counts. The head must hold still.
-robot::LaserCalibration CalibrateLaser(device::RobotDevices& dev, const robot::HeadKinematics& head,
-                                       const robot::StereoIntrinsics& cameras,
-                                       const SweepConfig& sweep, StripeFrameConfig config,
-                                       LaserCalibrationReport* report);
+/// the rotating-plane model over all counts, and measures the result against `quality`. The
+/// head must hold still. nullopt, with report->failure saying why, when a device's status ended
+/// it (report->failed_device) or the result is below `quality`.
+std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
+                                                      const robot::HeadKinematics& head,
+                                                      const robot::StereoIntrinsics& cameras,
+                                                      const SweepConfig& sweep,
+                                                      StripeFrameConfig config,
+                                                      LaserCalibrationReport* report,
+                                                      const LaserCalibrationQuality& quality = {});
 
 }  // namespace hgrasp::scan

@@ -106,4 +106,38 @@ TEST(CliScanTest, UsageErrorsExitTwo) {
       2);  // option without its value
 }
 
+// Issue 15: when report.json could not be written, scan left range.ply and range.png behind.
+TEST(CliScanTest, AReportThatCannotBeWrittenLeavesNoScanBehind) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_scan_unwritable";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "report.json");
+  const ScanCliResult r = RunHgrasp("scan " + std::string(HGRASP_ROOT_DIR) +
+                                    "/scenarios/default.yaml --out " + dir.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find((dir / "report.json").string()), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "range.ply"));
+  EXPECT_FALSE(fs::exists(dir / "range.png"));
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 1) << "a staging folder or output was left";
+  fs::remove_all(dir);
+}
+
+// Issue 15: the default scene (two boxes, no calibration target) gave a plane 45 deg and 207 mm
+// from the truth, written with exit 0. The calibration measures its own quality now.
+TEST(CliScanTest, CalibrationBelowItsQualityIsRefusedWithTheFigures) {
+  namespace fs = std::filesystem;
+  const fs::path out = fs::temp_directory_path() / "hgrasp_cli_bad_calibration.yaml";
+  fs::remove(out);
+  const ScanCliResult r = RunHgrasp("calibrate laser " + std::string(HGRASP_ROOT_DIR) +
+                                    "/scenarios/default.yaml --out " + out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("the rotating-plane model does not fit the stripes"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("deg (median) from the model"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("not written"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace

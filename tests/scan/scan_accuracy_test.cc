@@ -35,7 +35,11 @@ TEST(ScanAccuracyTest, SelfCalibrationRecoversTheLightPlane) {
   const auto head = Head();
   LaserCalibrationReport report;
   const SweepConfig sweep;
-  const robot::LaserCalibration cal = CalibrateLaser(dev, head, Cameras(), sweep, {}, &report);
+  const std::optional<robot::LaserCalibration> calibrated =
+      CalibrateLaser(dev, head, Cameras(), sweep, {}, &report);
+  ASSERT_TRUE(calibrated) << report.failure;
+  const robot::LaserCalibration& cal = *calibrated;
+  std::printf("self-calibration quality: %s\n", report.Figures().c_str());
   device::HeadState hs;
   dev.head->Read(&hs);
   const Pose3 X_WH = head.X_WH(hs.q);

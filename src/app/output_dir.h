@@ -1,0 +1,47 @@
+#pragma once
+/// @file The folder a command writes (`--out DIR`), written whole or not at all (DESIGN.md rule 5:
+/// no half-written output). The folder is checked before any work starts, so a path that cannot
+/// be written is a usage error (exit 2) naming it, not a failure after a minute of scanning.
+/// Every output goes first to a hidden staging folder inside DIR; Commit() moves them all into
+/// DIR once the command has written everything. A command that fails before, or throws, leaves
+/// DIR as it found it (and removes DIR, and any parents, when it created them).
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hgrasp::app {
+
+class OutputDir {
+ public:
+  /// Checks `dir` and prepares to write into it, creating it (and missing parents) if needed.
+  /// @throws hgrasp::InputError naming `dir` (field --out) when it is empty, is a file or
+  ///         anything else that is not a folder, or cannot be created or written into (a
+  ///         read-only or virtual file system such as /proc, a name too long, no permission).
+  explicit OutputDir(std::string dir);
+  /// Without Commit(): removes the staging folder, and the folders the constructor created.
+  ~OutputDir();
+  OutputDir(const OutputDir&) = delete;
+  OutputDir& operator=(const OutputDir&) = delete;
+
+  /// Where to write the output file `name` now: inside the staging folder.
+  std::string Path(std::string_view name) const;
+  /// The staging folder, for writers that take a folder.
+  const std::string& staging() const { return staging_; }
+  /// The folder as given.
+  const std::string& dir() const { return dir_; }
+
+  /// Moves every staged file into the folder, replacing files of the same names. Nothing is
+  /// moved unless every one can be.
+  /// @throws hgrasp::InputError naming the path when a file cannot take its place (a folder or
+  ///         other non-file of that name is there); std::runtime_error when a move fails.
+  void Commit();
+
+ private:
+  std::string dir_;
+  std::string staging_;
+  std::vector<std::string> created_;  ///< folders the constructor made, outermost first
+  bool committed_ = false;
+};
+
+}  // namespace hgrasp::app
