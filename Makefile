@@ -5,7 +5,7 @@
 #        out/default/
 # test   builds, then runs every test (ctest)
 # bench  builds, then runs the benchmarks in tests/bench/
-# fuzz   builds the protocol decoders' libFuzzer targets with clang (ASan + UBSan) in build-fuzz/
+# fuzz   builds the protocol decoders' and the file loaders' libFuzzer targets with clang (ASan + UBSan) in build-fuzz/
 #        and runs each for FUZZ_RUNS inputs
 
 JOBS     ?= 2
@@ -14,7 +14,7 @@ SCENARIO ?= scenarios/default.yaml
 OUT      ?= out/default
 FUZZ_BUILD ?= build-fuzz
 FUZZ_RUNS  ?= 1000000
-FUZZERS    := val2_fuzz biclops_fuzz sensorhand_fuzz laser_board_fuzz
+FUZZERS    := val2_fuzz biclops_fuzz sensorhand_fuzz laser_board_fuzz loaders_fuzz
 
 PACKAGES := build-essential cmake pkg-config git \
 	libmujoco-dev libeigen3-dev libopencv-dev liburdfdom-dev liburdfdom-tools \
@@ -62,9 +62,18 @@ fuzz: deps
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DHGRASP_FUZZ=ON -DHGRASP_BUILD_TESTS=OFF \
 	  -DCMAKE_BUILD_TYPE=RelWithDebInfo
 	cmake --build $(FUZZ_BUILD) -j$(JOBS) --target $(FUZZERS)
+	@# The loaders' fuzzer starts from every shipped and test file, its first byte naming the loader
+	@# (0 scenario, 1 cameras, 2 laser, 3 LEDs), and takes inputs up to 4 kB.
+	@corpus=$(FUZZ_BUILD)/corpus/loaders; rm -rf $$corpus; mkdir -p $$corpus; i=0; \
+	for f in scenarios/*.yaml tests/data/scenarios/*.yaml; do { printf '\000'; cat $$f; } > $$corpus/s$$i; i=$$((i+1)); done; \
+	for f in calibration/sim/cameras.yaml tests/data/calibration/bad_cameras_*.yaml; do { printf '\001'; cat $$f; } > $$corpus/c$$i; i=$$((i+1)); done; \
+	for f in calibration/sim/laser.yaml tests/data/calibration/bad_laser_*.yaml; do { printf '\002'; cat $$f; } > $$corpus/l$$i; i=$$((i+1)); done; \
+	{ printf '\003'; cat calibration/sim/leds.yaml; } > $$corpus/led
 	@for f in $(FUZZERS); do \
 	  echo "== $$f: $(FUZZ_RUNS) inputs"; \
-	  ./$(FUZZ_BUILD)/tests/fuzz/$$f -runs=$(FUZZ_RUNS) -max_len=512 -print_final_stats=1 || exit 1; \
+	  if [ $$f = loaders_fuzz ]; then args="-max_len=4096 -timeout=10 $(FUZZ_BUILD)/corpus/loaders"; \
+	  else args="-max_len=512"; fi; \
+	  ./$(FUZZ_BUILD)/tests/fuzz/$$f -runs=$(FUZZ_RUNS) -print_final_stats=1 $$args || exit 1; \
 	done
 
 clean:

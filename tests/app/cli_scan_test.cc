@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "tests/app/cli_util.h"
@@ -138,6 +139,23 @@ TEST(CliScanTest, CalibrationBelowItsQualityIsRefusedWithTheFigures) {
   EXPECT_NE(r.output.find("deg (median) from the model"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("not written"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// --out of calibrate laser is checked before the sweep: a folder, or a path under a file.
+TEST(CliScanTest, CalibrationOutThatCannotBeAFileExitsTwoAtOnce) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_cal_out";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "a_file") << "mine\n";
+  for (const fs::path& out : {dir, dir / "a_file" / "laser.yaml"}) {
+    const ScanCliResult r = RunHgrasp("calibrate laser " + std::string(HGRASP_ROOT_DIR) +
+                                      "/scenarios/calibration_target.yaml --out " + out.string());
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("--out: got '" + out.string() + "'"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("stripe positions"), std::string::npos) << "it swept first";
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

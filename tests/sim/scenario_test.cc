@@ -308,7 +308,7 @@ const BadCase kBadCases[] = {
     {"bad_target_both.yaml", 9, "task.target", "{color: yellow, name: a}"},
     {"bad_target_name.yaml", 9, "task.target.name", "purple_box"},
     {"bad_target_neither.yaml", 3, "task.target", "{}"},
-    {"bad_two_documents.yaml", 3, "top level", "---"},
+    {"bad_two_documents.yaml", 2, "top level", "---"},
     {"bad_unknown_key.yaml", 2, "camera_nosie", "camera_nosie"},
     {"bad_unknown_object_key.yaml", 8, "objects[0].texture", "texture"},
     {"bad_wall.yaml", 3, "wall.x", "0.6"},
@@ -506,6 +506,34 @@ TEST(ScenarioHostileTest, DeepNestingGivesAShortMessage) {
     const InputError e = ParseError(yaml);
     EXPECT_NE(std::string(e.what()).find("nest"), std::string::npos) << e.what();
     EXPECT_LT(std::string(e.what()).size(), 400u) << e.what();
+  }
+}
+
+// Control characters and bytes that are no UTF-8 are no YAML; yaml-cpp 0.7 looped without end,
+// allocating, on a 0x14 inside a flow collection and on 0xff bytes in a comment (both found by
+// the loaders' fuzzer).
+TEST(ScenarioHostileTest, ControlCharactersAreRefusedBeforeTheParser) {
+  EXPECT_NO_THROW(ParseScenario("# gr\xc3\xbcn \xe2\x80\x94 \xf0\x9f\x93\xa6\nname: t\n",
+                                "inline.yaml"));  // UTF-8 text passes
+  for (const std::string& yaml : {std::string("{\"name\": \"f\", \"seed\": [1, \x14\0, 2]}\n", 34),
+                                 std::string("name: t\nseed: [1, \x14, 2]\n"),
+                                 std::string("name: t\x7f\n"),
+                                 std::string("# gripper\xff\xff\xff per's frame\n,# x\n"),
+                                 std::string("name: \xc0\xaf\n"),  // an overlong '/'
+                                 std::string("name: t\xe2\x82\n")}) {  // cut short
+    const InputError e = ParseError(yaml);
+    EXPECT_NE(std::string(e.what()).find("at byte"), std::string::npos) << e.what();
+  }
+}
+
+// yaml-cpp's LoadAll looped without end on a stray ',' before a document, making documents out
+// of nothing until memory ran out (found by the loaders' fuzzer; plain text, so any user could
+// type it).
+TEST(ScenarioHostileTest, AStrayCommaIsASyntaxError) {
+  for (const char* yaml : {",\n", ",x\n", "# a comment\n,# another\nname: t\n"}) {
+    const InputError e = ParseError(yaml);
+    EXPECT_EQ(e.field(), "YAML syntax") << e.what();
+    EXPECT_NE(std::string(e.what()).find("stray ','"), std::string::npos) << e.what();
   }
 }
 
