@@ -92,7 +92,7 @@ TEST(CliDevices, EmulateRejectsUnknownDevices) {
 // once (inf). `timeout` turns a hang into a failure instead of a stuck test.
 TEST(CliDevices, EmulateRefusesSecondsThatAreNoTime) {
   for (const char* seconds : {"-1", "0", "nan", "inf", "-inf", "1e300"}) {
-    const auto r = RunHgrasp(std::string("emulate biclops --seconds ") + seconds);
+    const auto r = RunHgrasp(std::string("emulate biclops --seconds ") + seconds, 20);
     EXPECT_EQ(r.status, 2) << seconds << ": " << r.output;
     EXPECT_NE(r.output.find("--seconds"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("expected a time in seconds"), std::string::npos) << r.output;

@@ -14,10 +14,13 @@ struct CliResult {
   std::string output;  // stdout and stderr
 };
 
-/// Runs `hgrasp ARGS` (the built binary) and returns its exit status and output.
-inline CliResult RunHgrasp(const std::string& args) {
+/// Runs `hgrasp ARGS` (the built binary) and returns its exit status and output. With
+/// `limit_s` > 0 the command is killed after that long (status 124), so a hang fails the test
+/// instead of stopping the suite.
+inline CliResult RunHgrasp(const std::string& args, int limit_s = 0) {
   CliResult r;
-  const std::string cmd = std::string(HGRASP_BINARY) + " " + args + " 2>&1";
+  const std::string limit = limit_s > 0 ? "timeout " + std::to_string(limit_s) + " " : "";
+  const std::string cmd = limit + std::string(HGRASP_BINARY) + " " + args + " 2>&1";
   FILE* pipe = popen(cmd.c_str(), "r");
   if (pipe == nullptr) return r;
   std::array<char, 4096> buf;

@@ -358,15 +358,21 @@ TEST(CalibrationHostileTest, LaserOffTheHeadIsRefused) {
 
 // A self-referencing alias crashed every loader; a billion laughs ran for 40 s in 2 GB.
 TEST(CalibrationHostileTest, AliasBombsAreRefused) {
-  const std::string laughs = testing::BillionLaughs("left", "1");
-  for (const std::string& text : {std::string("left: &n [*n]\n"), laughs,
-                                  std::string("frame: &f {x: *f}\n")}) {
-    const std::string path = TempPath("hgrasp_alias_bomb.yaml");
+  // Each shaped so that the loader reaches the alias and shows it in its message.
+  const std::string cameras[] = {"right: {width: 1}\nleft: &n [*n]\n",
+                                 testing::BillionLaughs("right", "left")};
+  const std::string lasers[] = {"frame: camera_bracket\naxis_H: &n [*n]\n",
+                                "frame: camera_bracket\n" + testing::BillionLaughs("point_H", "axis_H")};
+  const std::string path = TempPath("hgrasp_alias_bomb.yaml");
+  for (const std::string& text : cameras) {
     WriteText(path, text);
     EXPECT_THROW(LoadStereoIntrinsics(path), InputError) << text;
-    EXPECT_THROW(LoadLaserCalibration(path), InputError) << text;
-    fs::remove(path);
   }
+  for (const std::string& text : lasers) {
+    WriteText(path, text);
+    EXPECT_THROW(LoadLaserCalibration(path), InputError) << text;
+  }
+  fs::remove(path);
 }
 
 }  // namespace

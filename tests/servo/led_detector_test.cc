@@ -88,7 +88,8 @@ TEST(MatchAndTriangulate, SyntheticStereoPairRoundTrip) {
     right.push_back({*k.Project(X_CLCR.inverse() * p_CL), 10, 200});
   }
   std::reverse(right.begin(), right.end());  // order must not matter
-  const std::vector<LedPoint> points = MatchAndTriangulate(left, right, {k, k}, rect);
+  const std::vector<LedPoint> points =
+      MatchAndTriangulate(left, right, robot::StereoIntrinsics{k, k, ""}, rect);
   ASSERT_EQ(points.size(), truth.size());
   for (const LedPoint& p : points) {
     double best = 1e9;
