@@ -57,7 +57,7 @@ nlohmann::json LookReport(const sim::Scenario& scenario, sim::SimRobot* robot,
   nlohmann::json report;
   report["scenario"] = scenario.name;
   report["seed"] = scenario.seed;
-  if (!r.scan) return report;
+  if (!r.scan || !r.scene) return report;  // the scan ended early (a device failed)
   const scan::ScanResult& scan = *r.scan;
   const model::SceneModel& scene = *r.scene;
   const std::vector<model::BoxModel>& boxes = scene.boxes;

@@ -115,6 +115,21 @@ int Scan(const ScanOptions& o) {
   const auto t_scan = std::chrono::steady_clock::now();
   const scan::ScanResult result = scanner.Scan(dev, {});
   const double scan_s = Seconds(t_scan);
+  if (result.status != device::Status::kOk) {
+    // A device failed: the report says which and what it said; there is no range to write.
+    const std::string detail = result.failed_device + ": " +
+                               std::string(device::ToString(result.status)) + " during the scan";
+    nlohmann::json report = {{"scenario", scenario.name},
+                             {"seed", scenario.seed},
+                             {"ok", false},
+                             {"failure", "device_error"},
+                             {"failure_detail", detail},
+                             {"timing_s", {{"scan", scan_s}, {"total", Seconds(t0)}}}};
+    WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
+    out.Commit();
+    spdlog::error("scan: device_error: {}; wrote {}", detail, o.out_dir);
+    return 1;
+  }
 
   // Ground truth: how far the accepted points lie from the true surfaces.
   double sum2 = 0;

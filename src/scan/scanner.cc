@@ -150,15 +150,33 @@ void Scanner::ProcessFrame(const device::StereoFrame& frame, const device::Stere
 
 ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
   ScanResult out;
+  // A device that fails ends the scan; the laser is told to go off whatever it said before.
+  const auto failed = [&](const std::string& device, device::Status st) {
+    out.status = st;
+    out.failed_device = device;
+    dev.laser->SetLaser(false);
+    return out;
+  };
   device::StereoFrame ambient;
-  dev.laser->SetLaser(false);
-  dev.cameras->Grab(&ambient);
+  if (const auto st = dev.laser->SetLaser(false); st != device::Status::kOk) {
+    return failed("laser", st);
+  }
+  if (const auto st = dev.cameras->Grab(&ambient); st != device::Status::kOk) {
+    return failed("cameras", st);
+  }
   CheckFrameSize(cameras_, ambient);
   out.ambient_left = ambient.left.clone();
   std::vector<device::StereoFrame> frames;
-  dev.laser->SetLaser(true);
-  Sweep(dev, sweep, [&](const device::StereoFrame& f) { frames.push_back(f); });
-  dev.laser->SetLaser(false);
+  if (const auto st = dev.laser->SetLaser(true); st != device::Status::kOk) {
+    return failed("laser", st);
+  }
+  std::string failed_device;
+  const device::Status swept = Sweep(
+      dev, sweep, [&](const device::StereoFrame& f) { frames.push_back(f); }, &failed_device);
+  if (swept != device::Status::kOk) return failed(failed_device, swept);
+  if (const auto st = dev.laser->SetLaser(false); st != device::Status::kOk) {
+    return failed("laser", st);
+  }
   out.range = RangeImage(cameras_.left.height, static_cast<int>(frames.size()));
   StripeFrameResult result;
   for (size_t i = 0; i < frames.size(); ++i) {

@@ -31,6 +31,11 @@ struct ScanResult {
   int points = 0;
   int rejected = 0;
   cv::Mat ambient_left;  ///< the left image with the laser off: the colour source
+  /// kOk, or the device status that ended the scan early (the range is then empty and the laser
+  /// has been told to go off); `failed_device` names the device that said it ("laser",
+  /// "cameras").
+  device::Status status = device::Status::kOk;
+  std::string failed_device;
 };
 
 /// Runs the laser from sweep.start_count to sweep.end_count at constant speed (laser already
@@ -51,6 +56,8 @@ class Scanner {
           robot::LaserCalibration laser, StripeFrameConfig config = {});
 
   /// One ambient frame (laser off), then a sweep with the laser on; the head must hold still.
+  /// Every device status is checked: the first that is not kOk ends the scan (ScanResult::status
+  /// and failed_device), with the laser told to go off.
   ScanResult Scan(device::RobotDevices& dev, const SweepConfig& sweep);
 
   /// Processes one frame pair as Scan does, into column `col` of `range` (which must have as

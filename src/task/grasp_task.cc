@@ -262,6 +262,11 @@ bool GraspTask::Look() {
   result_.scan_head = head.q;
   scan::Scanner scanner(model_.head, model_.cameras, model_.laser);
   result_.scan = scanner.Scan(*dev_, config_.sweep);
+  if (result_.scan->status != device::Status::kOk) {
+    return Fail(Failure::kDeviceError, result_.scan->failed_device + ": " +
+                                           std::string(device::ToString(result_.scan->status)) +
+                                           " during the scan");
+  }
   result_.scene = model::ModelScene(result_.scan->range, config_.model);
   const std::optional<std::string_view> colour =
       config_.target_color.empty() ? model::ColourOfName(config_.target_name)

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -155,6 +156,35 @@ TEST(CliDevices, CalibrationWithASilentHeadWritesNothing) {
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("device_error: head: timeout"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out));
+  fs::remove_all(dir);
+}
+
+// Issue 16: a laser board that does not answer during the scan ended as no_target; now the scan
+// ends as device_error naming the laser, and the report says so.
+TEST(CliDevices, ASilentLaserBoardEndsTheScanAsADeviceError) {
+  namespace fs = std::filesystem;
+  drivers::Pty silent;  // a board nobody answers for
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_silent_laser";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path scenario = dir / "silent_laser.yaml";
+  std::ifstream base(std::string(HGRASP_ROOT_DIR) + "/scenarios/default.yaml");
+  std::string text((std::istreambuf_iterator<char>(base)), std::istreambuf_iterator<char>());
+  text.replace(text.find("devices: {}"), std::string("devices: {}").size(),
+               "devices:\n  laser: {driver: laser_board, port: " + silent.port() + "}");
+  std::ofstream(scenario) << text;
+  for (const char* command : {"scan", "model"}) {
+    const fs::path out = dir / command;
+    const auto r = RunHgrasp(std::string(command) + " " + scenario.string() + " --out " +
+                                 out.string(),
+                             120);
+    EXPECT_EQ(r.status, 1) << r.output;
+    std::ifstream report(out / "report.json");
+    const std::string json((std::istreambuf_iterator<char>(report)),
+                           std::istreambuf_iterator<char>());
+    EXPECT_NE(json.find("laser: timeout during the scan"), std::string::npos) << json;
+    EXPECT_FALSE(fs::exists(out / "range.ply"));
+  }
   fs::remove_all(dir);
 }
 

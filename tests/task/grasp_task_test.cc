@@ -2,9 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include "common/paths.h"
 #include "sim/random_scene.h"
 #include "tests/task/task_sim_util.h"
+#include "tests/task/timing_out_laser.h"
 
 namespace hgrasp::task {
 namespace {
@@ -82,6 +85,24 @@ TEST(GraspTaskSim, AbsentTargetIsNoTarget) {
   EXPECT_EQ(o.result.message, "no green box found");
   EXPECT_FALSE(o.result.plan.has_value());
   EXPECT_EQ(ToString(o.result.failure), "no_target");
+}
+
+// Issue 16: the scan dropped the devices' statuses, so a laser board that stopped answering
+// ended the task as no_target ("no box found"). Now: device_error naming the laser, laser off.
+TEST(GraspTaskSim, ALaserThatTimesOutDuringTheScanIsADeviceError) {
+  const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  sim::SimRobot robot(scenario);
+  device::RobotDevices dev = robot.TakeDevices();
+  auto laser = std::make_unique<hgrasp::testing::TimingOutLaser>(std::move(dev.laser), 40);
+  const hgrasp::testing::TimingOutLaser* board = laser.get();
+  dev.laser = std::move(laser);
+  GraspTask task(&dev, testing::SimRobotModel(), testing::ConfigFor(scenario));
+  EXPECT_FALSE(task.Look());
+  EXPECT_EQ(task.result().failure, Failure::kDeviceError);
+  EXPECT_EQ(task.result().message, "laser: timeout during the scan");
+  ASSERT_FALSE(board->set().empty());
+  EXPECT_FALSE(board->set().back()) << "the laser was left on";
+  EXPECT_FALSE(task.result().scene.has_value());
 }
 
 // Issue 7's acceptance: over 20 seeded random scenes whose target the open hand can span, the
