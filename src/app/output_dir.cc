@@ -43,10 +43,7 @@ OutputDir::OutputDir(std::string dir) : dir_(std::move(dir)) {
     for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
       if (!fs::create_directory(*it, ec) || ec) {
         const std::string why = ec ? ec.message() : "it could not be created";
-        for (auto made = created_.rbegin(); made != created_.rend(); ++made) {
-          fs::remove(*made, ec);
-        }
-        created_.clear();
+        RemoveCreated();
         Refuse(dir_, "cannot create " + it->string() + ": " + why);
       }
       created_.push_back(it->string());
@@ -56,8 +53,7 @@ OutputDir::OutputDir(std::string dir) : dir_(std::move(dir)) {
   std::string tmpl = (p / ".hgrasp-partial-XXXXXX").string();
   if (mkdtemp(tmpl.data()) == nullptr) {
     const std::string why = std::strerror(errno);
-    for (auto made = created_.rbegin(); made != created_.rend(); ++made) fs::remove(*made, ec);
-    created_.clear();
+    RemoveCreated();
     Refuse(dir_, "cannot write into it: " + why);
   }
   staging_ = tmpl;
@@ -66,10 +62,15 @@ OutputDir::OutputDir(std::string dir) : dir_(std::move(dir)) {
 OutputDir::~OutputDir() {
   std::error_code ec;
   if (!staging_.empty()) fs::remove_all(staging_, ec);
-  if (committed_) return;
+  if (!committed_) RemoveCreated();
+}
+
+void OutputDir::RemoveCreated() {
+  std::error_code ec;
   for (auto made = created_.rbegin(); made != created_.rend(); ++made) {
     fs::remove(*made, ec);  // only when empty: a folder someone else filled stays
   }
+  created_.clear();
 }
 
 std::string OutputDir::Path(std::string_view name) const {

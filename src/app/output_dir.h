@@ -38,6 +38,10 @@ class OutputDir {
   void Commit();
 
  private:
+  /// Removes the folders the constructor made, innermost first, each only while empty. (The
+  /// constructor calls it before it throws: no destructor runs then.)
+  void RemoveCreated();
+
   std::string dir_;
   std::string staging_;
   std::vector<std::string> created_;  ///< folders the constructor made, outermost first
