@@ -1,6 +1,5 @@
 #include "sim/scenario.h"
 
-#include <sys/stat.h>
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
@@ -13,11 +12,11 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
-#include <system_error>
 #include <utility>
 
 #include "common/error.h"
 #include "common/yaml_file.h"
+#include "common/yaml_reader.h"
 #include "common/yaml_util.h"
 
 namespace hgrasp::sim {
@@ -64,22 +63,6 @@ using yaml::ParseUnsigned;
 using yaml::QuoteHint;
 using yaml::Render;
 
-// What a serial port's path opens, for telling whether two paths are one port: the device
-// number of a character device (any path to it: a symlink, /dev//ttyS9, a second device node),
-// the inode of another existing file, else the path with its symlinks resolved and "//" and
-// "." taken out.
-std::string PortIdentity(const std::string& port) {
-  struct stat st {};
-  if (::stat(port.c_str(), &st) == 0) {
-    if (S_ISCHR(st.st_mode)) return "char " + std::to_string(static_cast<unsigned long>(st.st_rdev));
-    return "inode " + std::to_string(static_cast<unsigned long>(st.st_dev)) + ":" +
-           std::to_string(static_cast<unsigned long>(st.st_ino));
-  }
-  std::error_code ec;
-  const std::filesystem::path canonical = std::filesystem::weakly_canonical(port, ec);
-  return "path " + (ec ? std::filesystem::path(port).lexically_normal() : canonical).string();
-}
-
 bool IsIdentifier(const std::string& s) {
   if (s.empty()) return false;
   for (char c : s) {
@@ -90,11 +73,7 @@ bool IsIdentifier(const std::string& s) {
   return true;
 }
 
-// One key: value pair of a map, by key.
-struct Entry {
-  YAML::Node key, value;
-};
-using Entries = std::map<std::string, Entry>;
+using yaml::Entries;
 
 // An object's nodes needed again for the checks across objects. Assigned once each: assigning
 // to a YAML::Node that already refers to a node would overwrite that node, not rebind.
@@ -105,85 +84,13 @@ struct ObjectNodes {
 // ---------------------------------------------------------------------------------------------
 // The parser: every check names "FILE:LINE", the field path, the value and what was expected.
 
-class Parser {
+class Parser : public yaml::Reader {
  public:
-  explicit Parser(std::string path) : path_(std::move(path)) {}
+  using yaml::Reader::Reader;
 
   Scenario Parse(const std::string& text);
 
  private:
-  std::string Where(const YAML::Mark& mark) const { return yaml::Where(path_, mark); }
-
-  [[noreturn]] void Fail(const YAML::Mark& mark, const std::string& field, const std::string& value,
-                         const std::string& expected) const {
-    throw InputError(Where(mark), field, value, expected);
-  }
-
-  [[noreturn]] void Fail(const YAML::Node& at, const std::string& field,
-                         const std::string& expected) const {
-    Fail(at.Mark(), field, Render(at), expected);
-  }
-
-  // Checks that `n` is a map whose keys are all in `allowed`, each once; returns its entries.
-  Entries MapOf(const YAML::Node& n, const std::string& field, const Keys& allowed,
-                const std::string& expected) const {
-    if (!n.IsMap()) Fail(n, field, expected);
-    Entries entries;
-    for (const auto& kv : n) {
-      const YAML::Node& key = kv.first;
-      const std::string name = key.IsScalar() ? key.Scalar() : Render(key);
-      bool known = false;
-      for (std::string_view a : allowed) known = known || name == a;
-      if (!key.IsScalar() || !known) {
-        Fail(key.Mark(), Join(field, name), name, "a known key here, " + OneOf(allowed));
-      }
-      if (entries.count(name) != 0) {
-        Fail(key.Mark(), Join(field, name), name,
-             "each key once (it is also on line " +
-                 std::to_string(entries.at(name).key.Mark().line + 1) + ")");
-      }
-      entries.emplace(name, Entry{key, kv.second});
-    }
-    return entries;
-  }
-
-  static const YAML::Node* Find(const Entries& entries, std::string_view key) {
-    const auto it = entries.find(std::string(key));
-    return it == entries.end() ? nullptr : &it->second.value;
-  }
-
-  const YAML::Node& Require(const Entries& entries, const YAML::Node& map, const std::string& field,
-                            std::string_view key, const std::string& expected) const {
-    const YAML::Node* n = Find(entries, key);
-    if (n == nullptr) Fail(map.Mark(), Join(field, key), "", expected);
-    return *n;
-  }
-
-  double Number(const YAML::Node& n, const std::string& field, const std::string& expected) const {
-    const std::optional<double> v = ParseNumber(n);
-    if (!v) Fail(n, field, expected + QuoteHint(n));
-    return *v;
-  }
-
-  // A sequence of exactly `count` numbers.
-  Eigen::VectorXd Numbers(const YAML::Node& n, const std::string& field, std::size_t count,
-                          const std::string& expected) const {
-    if (!n.IsSequence() || n.size() != count) Fail(n, field, expected);
-    Eigen::VectorXd v(count);
-    for (std::size_t i = 0; i < count; ++i) {
-      const std::optional<double> x = ParseNumber(n[i]);
-      if (!x) Fail(n, field, expected + QuoteHint(n));
-      v[static_cast<Eigen::Index>(i)] = *x;
-    }
-    return v;
-  }
-
-  std::string Text(const YAML::Node& n, const std::string& field,
-                   const std::string& expected) const {
-    if (!n.IsScalar() || n.Scalar().empty()) Fail(n, field, expected);
-    return n.Scalar();
-  }
-
   std::string Name(const YAML::Node& n, const std::string& field) const {
     const std::string s = Text(n, field, "a name of letters, digits, '_', '-' or '.'");
     if (!IsIdentifier(s)) Fail(n, field, "a name of letters, digits, '_', '-' or '.'");
@@ -193,11 +100,7 @@ class Parser {
   ObjectSpec ParseObject(const YAML::Node& n, const std::string& field, ObjectNodes* nodes) const;
   InterferenceSpec ParseInterference(const YAML::Node& n, const std::string& field) const;
   TaskSpec ParseTask(const YAML::Node& n, const std::string& field, YAML::Node* name_node) const;
-  DeviceSpec ParseDevice(const YAML::Node& n, std::string_view key, const std::string& field) const;
-  void CheckAcrossDevices(const Scenario& s, const YAML::Node& devices) const;
   void CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const;
-
-  std::string path_;
 };
 
 ObjectSpec Parser::ParseObject(const YAML::Node& n, const std::string& field,
@@ -332,116 +235,6 @@ TaskSpec Parser::ParseTask(const YAML::Node& n, const std::string& field,
   return t;
 }
 
-DeviceSpec Parser::ParseDevice(const YAML::Node& n, std::string_view key,
-                               const std::string& field) const {
-  // The drivers this device accepts.
-  std::vector<std::string> drivers = {"sim"};
-  const DriverKind* kind = nullptr;
-  for (const DriverKind& k : kDrivers) {
-    if (k.devices[0] == key || k.devices[1] == key) drivers.emplace_back(k.driver);
-  }
-  const std::string driver_expected =
-      "a driver for " + std::string(key) + ", " + OneOf(Keys(drivers.begin(), drivers.end()));
-  if (!n.IsMap()) Fail(n, field, "a device backend: a map with driver and its settings");
-  const YAML::Node driver = n["driver"];
-  if (!driver) Fail(n.Mark(), Join(field, "driver"), "", driver_expected);
-  DeviceSpec d;
-  d.line = n.Mark().line + 1;
-  d.driver = Text(driver, Join(field, "driver"), driver_expected);
-  for (const DriverKind& k : kDrivers) {
-    if (k.driver == d.driver && (k.devices[0] == key || k.devices[1] == key)) kind = &k;
-  }
-  if (kind == nullptr && d.driver != "sim") Fail(driver, Join(field, "driver"), driver_expected);
-
-  Keys allowed = {"driver"};
-  std::string expected = "a device backend: driver " + d.driver + " takes no settings";
-  if (d.serial()) {
-    allowed = {"driver", "port", "baud", "framing"};
-    expected = "a serial device: driver, port and optionally baud, framing";
-  } else if (d.driver == "gstreamer") {
-    allowed = {"driver", "left", "right"};
-    expected = "cameras through GStreamer: driver, left and right (the pipelines)";
-  }
-  const Entries e = MapOf(n, field, allowed, expected);
-  if (d.serial()) {
-    const std::string port_expected = "the serial port's path, e.g. /dev/ttyS0";
-    d.port = Text(Require(e, n, field, "port", port_expected), Join(field, "port"), port_expected);
-    d.baud = kind->default_baud;
-    if (const YAML::Node* baud = Find(e, "baud")) {
-      static constexpr int kBauds[] = {1200,  2400,   4800,   9600,   19200, 38400,
-                                       57600, 115200, 230400, 460800, 921600};
-      std::string rates;
-      for (int b : kBauds) rates += (rates.empty() ? "" : ", ") + std::to_string(b);
-      const std::string baud_expected = "a standard baud rate: " + rates;
-      const std::optional<std::uint64_t> v = ParseUnsigned(*baud);
-      if (!v || std::find(std::begin(kBauds), std::end(kBauds), static_cast<int>(*v)) ==
-                    std::end(kBauds)) {
-        Fail(*baud, Join(field, "baud"), baud_expected + QuoteHint(*baud));
-      }
-      d.baud = static_cast<int>(*v);
-    }
-    if (const YAML::Node* framing = Find(e, "framing")) {
-      const std::string framing_expected =
-          "data bits 5-8, parity N, E or O, stop bits 1 or 2, e.g. 8N1";
-      d.framing = Text(*framing, Join(field, "framing"), framing_expected);
-      const std::string& f = d.framing;
-      if (f.size() != 3 || f[0] < '5' || f[0] > '8' ||
-          std::string("NEO").find(f[1]) == std::string::npos || (f[2] != '1' && f[2] != '2')) {
-        Fail(*framing, Join(field, "framing"), framing_expected);
-      }
-    }
-  } else if (d.driver == "gstreamer") {
-    const std::string pipe_expected =
-        "a GStreamer pipeline ending in appsink, e.g. v4l2src device=/dev/video0 ! videoconvert "
-        "! appsink";
-    d.left = Text(Require(e, n, field, "left", pipe_expected), Join(field, "left"), pipe_expected);
-    d.right =
-        Text(Require(e, n, field, "right", pipe_expected), Join(field, "right"), pipe_expected);
-  }
-  return d;
-}
-
-void Parser::CheckAcrossDevices(const Scenario& s, const YAML::Node& devices) const {
-  const auto spec = [&](const char* key) -> const DeviceSpec* {
-    const auto it = s.devices.find(key);
-    return it == s.devices.end() ? nullptr : &it->second;
-  };
-  // The camera driver takes the laser's encoder count latched at each exposure from the board.
-  const DeviceSpec* cameras = spec("cameras");
-  const DeviceSpec* laser = spec("laser");
-  if (cameras != nullptr && cameras->driver == "gstreamer" &&
-      (laser == nullptr || laser->driver != "laser_board")) {
-    Fail(devices["cameras"]["driver"], "devices.cameras.driver",
-         "sim, unless devices.laser is the laser_board too: real cameras take the laser's encoder "
-         "count latched at each frame from the board");
-  }
-  // One port, one device; the laser and the LEDs share the laser board. Ports are compared by
-  // the device they open, not by how their paths are spelled.
-  std::map<std::string, std::string> owner;  // port identity -> device key
-  for (const auto& [key, d] : s.devices) {
-    if (!d.serial()) continue;
-    const auto [it, fresh] = owner.emplace(PortIdentity(d.port), key);
-    if (fresh) continue;
-    const DeviceSpec& other = s.devices.at(it->second);
-    const bool board = d.driver == "laser_board" && other.driver == "laser_board";
-    if (!board) {
-      Fail(devices[key]["port"], Join(Join("devices", key), "port"),
-           "a port of its own (devices." + it->second + " uses it, as " + other.port + ")");
-    }
-    if (d.baud != other.baud || d.framing != other.framing) {
-      Fail(devices[key]["port"], Join(Join("devices", key), "port"),
-           "the laser and the LEDs on one board: the same baud and framing as devices." +
-               it->second);
-    }
-  }
-  const DeviceSpec* leds = spec("leds");
-  if (laser != nullptr && leds != nullptr && laser->driver == "laser_board" &&
-      leds->driver == "laser_board" && PortIdentity(laser->port) != PortIdentity(leds->port)) {
-    Fail(devices["leds"]["port"], "devices.leds.port",
-         "the laser's port, " + laser->port + " (the laser and the LEDs are one board)");
-  }
-}
-
 void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const {
   std::vector<Footprint> footprints;
   for (std::size_t i = 0; i < s.objects.size(); ++i) {
@@ -481,7 +274,7 @@ Scenario Parser::Parse(const std::string& text) {
   const std::string top_expected =
       "a map of scenario fields: name, seed, camera_noise, lighting, wall, objects, "
       "interference, task, devices";
-  const YAML::Node root = yaml::LoadDocument(text, path_, top_expected);
+  const YAML::Node root = yaml::LoadDocument(text, path(), top_expected);
   if (!root.IsMap()) Fail(root, "top level", top_expected);
   const Entries e = MapOf(root, "",
                           {"name", "seed", "camera_noise", "lighting", "wall", "objects",
@@ -489,7 +282,7 @@ Scenario Parser::Parse(const std::string& text) {
                           top_expected);
 
   Scenario s;
-  s.path = path_;
+  s.path = path();
   s.name = Name(Require(e, root, "", "name", "a scenario name"), "name");
 
   if (const YAML::Node* seed = Find(e, "seed")) {
@@ -563,15 +356,7 @@ Scenario Parser::Parse(const std::string& text) {
     s.task = ParseTask(*task, "task", &target_name_node);
   }
 
-  if (const YAML::Node* devices = Find(e, "devices")) {
-    const Keys keys(kDeviceKeys.begin(), kDeviceKeys.end());
-    const Entries de = MapOf(*devices, "devices", keys,
-                             "a map from device to backend, e.g. {head: {driver: sim}}");
-    for (const auto& [key, entry] : de) {
-      s.devices.emplace(key, ParseDevice(entry.value, key, Join("devices", key)));
-    }
-    CheckAcrossDevices(s, *devices);
-  }
+  if (const YAML::Node* devices = Find(e, "devices")) s.devices = drivers::ParseDevices(*this, *devices);
 
   // Checks across fields.
   CheckAcrossObjects(s, object_nodes);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "common/geometry.h"
+#include "config/device_config.h"
 
 namespace hgrasp::sim {
 
@@ -54,10 +55,6 @@ constexpr double kMaxWallX = 5.0;
 inline constexpr std::array<std::string_view, 10> kColorNames = {
     "red", "orange", "yellow", "green", "cyan", "blue", "magenta", "white", "grey", "black"};
 
-/// Device keys accepted under `devices:`.
-inline constexpr std::array<std::string_view, 8> kDeviceKeys = {
-    "arm_left", "arm_right", "hand_left", "hand_right", "head", "laser", "leds", "cameras"};
-
 /// One object resting on the table.
 struct ObjectSpec {
   std::string name;                                      ///< unique within the scenario
@@ -94,35 +91,6 @@ struct TaskSpec {
   double lift_m = 0.05;      ///< m, > 0 and <= kMaxLift
 };
 
-/// A real driver and the devices it can serve (DESIGN.md rule 2: the backend is chosen here, at
-/// run time). Every device also accepts driver "sim".
-struct DriverKind {
-  std::string_view driver;
-  std::array<std::string_view, 2> devices;  ///< keys of kDeviceKeys ("" when only one)
-  int default_baud;                         ///< serial drivers; 0 for the cameras
-};
-
-inline constexpr std::array<DriverKind, 5> kDrivers = {{
-    {"val2", {"arm_left", "arm_right"}, 9600},           // Puma controllers, VAL II
-    {"sensorhand", {"hand_left", "hand_right"}, 19200},  // Otto Bock SensorHand Speed
-    {"biclops", {"head", ""}, 9600},                     // PMD motion chips of the Biclops head
-    {"laser_board", {"laser", "leds"}, 115200},          // our laser/LED board
-    {"gstreamer", {"cameras", ""}, 0},                   // frame grabber through GStreamer
-}};
-
-/// Backend of one device (DESIGN.md rule 2), e.g. `arm_left: {driver: val2, port: /dev/ttyS0}`.
-struct DeviceSpec {
-  std::string driver = "sim";   ///< "sim" or one of kDrivers serving this device
-  std::string port;             ///< serial drivers: the port's path (required)
-  int baud = 0;                 ///< serial drivers: bits/s, a standard rate (default per driver)
-  std::string framing = "8N1";  ///< serial drivers: data bits 5-8, parity N/E/O, stop bits 1-2
-  std::string left, right;      ///< gstreamer: the left and right camera's pipeline (required)
-  int line = 0;  ///< the entry's line in the scenario file (1-based), for errors found later
-
-  bool simulated() const { return driver == "sim"; }
-  bool serial() const { return !simulated() && driver != "gstreamer"; }
-};
-
 /// A parsed and checked scenario file.
 struct Scenario {
   std::string path;              ///< the file it came from (as given to LoadScenario)
@@ -134,8 +102,8 @@ struct Scenario {
   std::vector<ObjectSpec> objects;
   std::vector<InterferenceSpec> interference;
   std::optional<TaskSpec> task;
-  /// Keys among kDeviceKeys; a device not listed is simulated.
-  std::map<std::string, DeviceSpec> devices;
+  /// Each device's backend (drivers/config/device_config.h); a device not listed is simulated.
+  drivers::DevicesConfig devices;
 };
 
 /// Reads and checks the scenario file at `path` (used as given; resolve it first with

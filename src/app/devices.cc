@@ -3,6 +3,7 @@
 #include "biclops/biclops_head.h"
 #include "camera/gst_stereo_camera.h"
 #include "common/error.h"
+#include "config/device_config.h"
 #include "laser_board/board_devices.h"
 #include "laser_board/laser_board.h"
 #include "sensorhand/sensorhand_hand.h"
@@ -13,76 +14,72 @@ namespace hgrasp::app {
 namespace {
 
 using device::Side;
-
-drivers::SerialConfig SerialOf(const sim::DeviceSpec& d) {
-  drivers::SerialConfig c;
-  c.port = d.port;
-  c.baud = d.baud;
-  c.data_bits = d.framing[0] - '0';
-  c.parity = d.framing[1] == 'E'   ? drivers::Parity::kEven
-             : d.framing[1] == 'O' ? drivers::Parity::kOdd
-                                   : drivers::Parity::kNone;
-  c.stop_bits = d.framing[2] - '0';
-  return c;
-}
+namespace cfg = drivers;
 
 // "FILE:LINE" of a device's entry, for errors found when opening it.
-std::string Where(const sim::Scenario& s, const sim::DeviceSpec& d) {
+std::string Where(const sim::Scenario& s, const cfg::DeviceConfig& d) {
   return d.line > 0 ? s.path + ":" + std::to_string(d.line) : s.path;
 }
 
 // Opens a device's serial port; a port that cannot be opened is bad input (exit 2), named.
 std::unique_ptr<drivers::ByteLink> OpenPort(const sim::Scenario& s, const std::string& key) {
-  const sim::DeviceSpec& d = s.devices.at(key);
+  const cfg::DeviceConfig& d = *s.devices.Find(key);
+  const drivers::SerialConfig& serial = *d.serial();
   std::string error;
-  std::unique_ptr<drivers::SerialPort> port = drivers::SerialPort::Open(SerialOf(d), &error);
+  std::unique_ptr<drivers::SerialPort> port = drivers::SerialPort::Open(serial, &error);
   if (!port) {
-    throw InputError(Where(s, d), "devices." + key + ".port", d.port,
-                     "a serial port that can be opened at " + std::to_string(d.baud) + " " +
-                         d.framing + " (" + error + ")");
+    throw InputError(Where(s, d), "devices." + key + ".port", serial.port,
+                     "a serial port that can be opened at " + std::to_string(serial.baud) + " " +
+                         cfg::Framing(serial) + " (" + error + ")");
   }
   return port;
 }
 
-const sim::DeviceSpec* Spec(const sim::Scenario& s, const std::string& key) {
-  const auto it = s.devices.find(key);
-  return it == s.devices.end() || it->second.simulated() ? nullptr : &it->second;
-}
-
 }  // namespace
 
-bool AllSimulated(const sim::Scenario& scenario) {
-  for (const auto& [key, d] : scenario.devices) {
-    if (!d.simulated()) return false;
-  }
-  return true;
+Robot OpenRobot(const sim::Scenario& scenario) {
+  Robot robot;
+  robot.all_simulated = scenario.devices.AllSimulated();
+  if (scenario.devices.AnySimulated()) robot.twin = std::make_unique<sim::SimRobot>(scenario);
+  robot.devices = MakeDevices(scenario, robot.twin.get());
+  return robot;
 }
 
-device::RobotDevices MakeDevices(const sim::Scenario& s, sim::SimRobot* robot) {
-  device::RobotDevices dev = robot->TakeDevices();
+device::RobotDevices MakeDevices(const sim::Scenario& s, sim::SimRobot* twin) {
+  const cfg::DevicesConfig& c = s.devices;
+  HGRASP_DEMAND_MSG(twin != nullptr || !c.AnySimulated(),
+                    "MakeDevices needs the simulated robot when a device is simulated");
+  device::RobotDevices dev;
+  if (twin != nullptr) dev = twin->TakeDevices();
   for (Side side : {Side::kLeft, Side::kRight}) {
     const int i = static_cast<int>(side);
     const std::string name(device::ToString(side));
-    if (Spec(s, "arm_" + name) != nullptr) {
-      dev.arm[i] = std::make_unique<drivers::Val2Arm>(OpenPort(s, "arm_" + name));
+    if (const auto* arm = c.Backend<cfg::Val2Backend>("arm_" + name)) {
+      dev.arm[i] = std::make_unique<drivers::Val2Arm>(OpenPort(s, "arm_" + name), arm->options);
     }
-    if (Spec(s, "hand_" + name) != nullptr) {
-      dev.hand[i] = std::make_unique<drivers::SensorHandHand>(OpenPort(s, "hand_" + name));
+    if (const auto* hand = c.Backend<cfg::SensorHandBackend>("hand_" + name)) {
+      dev.hand[i] =
+          std::make_unique<drivers::SensorHandHand>(OpenPort(s, "hand_" + name), hand->options);
     }
   }
-  if (Spec(s, "head") != nullptr) {
-    dev.head = std::make_unique<drivers::BiclopsHead>(OpenPort(s, "head"));
+  if (const auto* head = c.Backend<cfg::BiclopsBackend>("head")) {
+    dev.head = std::make_unique<drivers::BiclopsHead>(OpenPort(s, "head"), head->options);
   }
-  // The laser and the LEDs hang on one board: one driver for both when both are real.
+  // The laser and the LEDs hang on one board: one driver for both when both are real (the
+  // loader has checked that they share the port and its settings; the laser's options win).
   std::shared_ptr<drivers::LaserBoard> board;
   for (const char* key : {"laser", "leds"}) {
-    if (Spec(s, key) != nullptr && !board) {
-      board = std::make_shared<drivers::LaserBoard>(OpenPort(s, key));
+    if (const auto* b = c.Backend<cfg::LaserBoardBackend>(key); b != nullptr && !board) {
+      board = std::make_shared<drivers::LaserBoard>(OpenPort(s, key), b->options);
     }
   }
-  if (Spec(s, "laser") != nullptr) dev.laser = std::make_unique<drivers::BoardStripeLaser>(board);
-  if (Spec(s, "leds") != nullptr) dev.leds = std::make_unique<drivers::BoardLeds>(board);
-  if (const sim::DeviceSpec* cameras = Spec(s, "cameras")) {
+  if (c.Backend<cfg::LaserBoardBackend>("laser")) {
+    dev.laser = std::make_unique<drivers::BoardStripeLaser>(board);
+  }
+  if (c.Backend<cfg::LaserBoardBackend>("leds")) {
+    dev.leds = std::make_unique<drivers::BoardLeds>(board);
+  }
+  if (const auto* cameras = c.Backend<cfg::GstreamerBackend>("cameras")) {
     // The scenario loader has checked that the laser is on the board.
     drivers::LatchSource latch = [board](drivers::ExposureLatch* out) {
       drivers::FrameLatch l;
@@ -93,11 +90,10 @@ device::RobotDevices MakeDevices(const sim::Scenario& s, sim::SimRobot* robot) {
       return status;
     };
     std::string error;
-    auto camera = drivers::GstStereoCamera::Open({cameras->left, cameras->right}, latch,
-                                                 dev.head.get(), &error);
+    auto camera = drivers::GstStereoCamera::Open(cameras->cameras, latch, dev.head.get(), &error);
     if (!camera) {
-      throw InputError(Where(s, *cameras), "devices.cameras",
-                       error.rfind("left", 0) == 0 ? cameras->left : cameras->right,
+      throw InputError(Where(s, *c.Find("cameras")), "devices.cameras",
+                       error.rfind("left", 0) == 0 ? cameras->cameras.left : cameras->cameras.right,
                        "GStreamer pipelines that open (" + error + ")");
     }
     dev.cameras = std::move(camera);

@@ -230,15 +230,16 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   const task::TaskConfig config = TaskConfigFor(scenario);
   task::RobotModel robot_model = task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
   OutputDir out(o.out_dir);
-  sim::SimRobot robot(scenario);
-  device::RobotDevices dev = MakeDevices(scenario, &robot);
+  Robot robot = OpenRobot(scenario);
+  device::RobotDevices& dev = robot.devices;
   task::GraspTask task(&dev, robot_model, config);
   const bool ok = task.Look() && (!plan || task.Plan());
   const task::TaskResult& r = task.result();
-  nlohmann::json report = LookReport(scenario, AllSimulated(scenario) ? &robot : nullptr, r,
-                                     robot_model, plan, out.staging());
+  nlohmann::json report =
+      LookReport(scenario, robot.truth(), r, robot_model, plan, out.staging());
   report["ok"] = ok;
-  report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
+  report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
+  report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
   nlohmann::json timing = {{"total", Seconds(t0)}};
   if (r.scene) {
     timing["scan"] = r.stages[0].wall_s - r.scene->segment_s - r.scene->model_s;
@@ -250,7 +251,9 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
   out.Commit();
   spdlog::info("{}: total {:.2f} s; wrote {}", plan ? "plan" : "model", Seconds(t0), o.out_dir);
-  if (!ok) spdlog::warn("{}: {}", plan ? "plan" : "model", r.message);
+  if (!ok) {
+    spdlog::warn("{}: {}: {}", plan ? "plan" : "model", task::ToString(r.failure), r.message);
+  }
   return ok ? 0 : 1;
 }
 

@@ -70,9 +70,10 @@ int Run(const RunOptions& o) {
   const task::RobotModel robot_model =
       task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
   OutputDir out_dir(o.out_dir);
-  sim::SimRobot robot(scenario);
-  device::RobotDevices dev = MakeDevices(scenario, &robot);
-  const bool sim_truth = AllSimulated(scenario);
+  Robot robot = OpenRobot(scenario);
+  device::RobotDevices& dev = robot.devices;
+  sim::SimRobot* const truth = robot.truth();  // null unless every device is simulated
+  const bool sim_truth = truth != nullptr;
   const fs::path out(out_dir.staging());
 
   cv::VideoWriter video;
@@ -104,7 +105,7 @@ int Run(const RunOptions& o) {
       const Pose3 X_WCL = robot_model.head.X_WC(robot::HeadKinematics::kLeft, frame.head);
       const grasp::GraspPlan& plan = *task_ptr->result().plan;
       const Pose3& X_WT = view.moment == "grasp_reached" ? plan.X_WE : plan.X_WE_pre;
-      const sim::PoseError e = sim::GripperPoseError(robot.world(), plan.side, X_WCL, X_WT);
+      const sim::PoseError e = sim::GripperPoseError(truth->world(), plan.side, X_WCL, X_WT);
       truth_run[std::string(view.moment)] = {{"gripper_to_plan_m", e.translation_m},
                                              {"gripper_to_plan_deg", RadToDeg(e.rotation_rad)}};
     }
@@ -116,15 +117,15 @@ int Run(const RunOptions& o) {
   const bool ok = task.Look() && [&] {
     if (sim_truth && task.result().target) {
       const sim::SimObject* object =
-          TargetObject(robot.world(), task.result().scene->boxes[*task.result().target]);
-      if (object != nullptr) z0 = robot.world().BodyPose(object->body).translation().z();
+          TargetObject(truth->world(), task.result().scene->boxes[*task.result().target]);
+      if (object != nullptr) z0 = truth->world().BodyPose(object->body).translation().z();
     }
     return task.Plan() && task.Approach() && task.Servo() && task.Close() && task.Lift();
   }();
   const task::TaskResult& r = task.result();
 
   nlohmann::json report =
-      LookReport(scenario, sim_truth ? &robot : nullptr, r, robot_model, true, out_dir.staging());
+      LookReport(scenario, truth, r, robot_model, true, out_dir.staging());
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
@@ -164,8 +165,8 @@ int Run(const RunOptions& o) {
   report["wall_time_s"] = r.wall_s;
   if (sim_truth) {
     if (z0 && r.target) {
-      const sim::SimObject* object = TargetObject(robot.world(), r.scene->boxes[*r.target]);
-      const double rise = robot.world().BodyPose(object->body).translation().z() - *z0;
+      const sim::SimObject* object = TargetObject(truth->world(), r.scene->boxes[*r.target]);
+      const double rise = truth->world().BodyPose(object->body).translation().z() - *z0;
       truth_run["object"] = object->spec.name;
       truth_run["object_rise_m"] = rise;
     }

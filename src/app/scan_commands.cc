@@ -60,8 +60,8 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
     if (p == p.parent_path()) break;
   }
   const auto head = Head();
-  sim::SimRobot robot(scenario);
-  device::RobotDevices dev = MakeDevices(scenario, &robot);
+  Robot robot = OpenRobot(scenario);
+  device::RobotDevices& dev = robot.devices;
   scan::LaserCalibrationReport report;
   const scan::SweepConfig sweep;
   const std::optional<robot::LaserCalibration> calibrated =
@@ -84,7 +84,7 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   robot::SaveLaserCalibration(cal, o.out_file);
   spdlog::info("calibrate laser: {}; wrote {} ({:.1f} s)", report.Figures(), o.out_file,
                Seconds(t0));
-  if (!AllSimulated(scenario)) return 0;
+  if (robot.truth() == nullptr) return 0;
 
   // Ground truth: the calibrated plane against the simulator's at every count of the sweep.
   device::HeadState hs;
@@ -93,7 +93,7 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   const std::int32_t lo = std::min(sweep.start_count, sweep.end_count);
   const std::int32_t hi = std::max(sweep.start_count, sweep.end_count);
   const sim::LaserPlaneError error = sim::CompareLaserPlanes(
-      robot.rig(), [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, lo, hi);
+      robot.truth()->rig(), [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, lo, hi);
   spdlog::info(
       "calibrate laser: against the simulator's planes over counts {}..{}: worst {:.4f} deg, "
       "{:.3f} mm",
@@ -107,8 +107,8 @@ int Scan(const ScanOptions& o) {
   const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
   const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
   OutputDir out(o.out_dir);
-  sim::SimRobot robot(scenario);
-  device::RobotDevices dev = MakeDevices(scenario, &robot);
+  Robot robot = OpenRobot(scenario);
+  device::RobotDevices& dev = robot.devices;
   scan::StripeFrameConfig config;
   config.stereo = !o.single_camera;
   scan::Scanner scanner(Head(), cameras, laser, config);
@@ -131,24 +131,6 @@ int Scan(const ScanOptions& o) {
     return 1;
   }
 
-  // Ground truth: how far the accepted points lie from the true surfaces.
-  double sum2 = 0;
-  int n = 0, beyond_5mm = 0;
-  std::vector<double> errors;
-  for (int r = 0; r < result.range.rows(); ++r) {
-    for (int c = 0; c < result.range.cols(); ++c) {
-      const scan::RangeCell& cell = result.range.at(r, c);
-      if (!cell.valid) continue;
-      const double e = sim::DistanceToTrueSurface(robot.world(), cell.p_W);
-      sum2 += e * e, ++n;
-      beyond_5mm += e > 0.005;
-      errors.push_back(e);
-    }
-  }
-  std::sort(errors.begin(), errors.end());
-  const auto percentile = [&](double q) {
-    return errors.empty() ? 0.0 : errors[static_cast<size_t>(q * (errors.size() - 1))];
-  };
   nlohmann::json report;
   report["scenario"] = scenario.name;
   report["seed"] = scenario.seed;
@@ -156,24 +138,47 @@ int Scan(const ScanOptions& o) {
   report["failure"] = nullptr;
   report["range"] = {{"points", result.points}, {"rejected", result.rejected}};
   report["timing_s"] = {{"scan", scan_s}, {"total", Seconds(t0)}};
-  nlohmann::json truth = sim::TruthJson(robot.world(), robot.rig(), {});
-  truth["range"] = {{"rms_to_surface_m", n > 0 ? std::sqrt(sum2 / n) : 0.0},
-                    {"median_to_surface_m", percentile(0.5)},
-                    {"p99_to_surface_m", percentile(0.99)},
-                    {"beyond_5mm", beyond_5mm},
-                    {"mode", o.single_camera ? "single_camera" : "stereo"}};
-  if (AllSimulated(scenario)) report["truth"] = truth;  // what the devices saw is the sim's
+  std::string truth_line;
+  if (sim::SimRobot* twin = robot.truth()) {
+    // Ground truth (only when every device is the twin's: then what the devices saw is the
+    // sim's): how far the accepted points lie from the true surfaces.
+    double sum2 = 0;
+    int n = 0, beyond_5mm = 0;
+    std::vector<double> errors;
+    for (int r = 0; r < result.range.rows(); ++r) {
+      for (int c = 0; c < result.range.cols(); ++c) {
+        const scan::RangeCell& cell = result.range.at(r, c);
+        if (!cell.valid) continue;
+        const double e = sim::DistanceToTrueSurface(twin->world(), cell.p_W);
+        sum2 += e * e, ++n;
+        beyond_5mm += e > 0.005;
+        errors.push_back(e);
+      }
+    }
+    std::sort(errors.begin(), errors.end());
+    const auto percentile = [&](double q) {
+      return errors.empty() ? 0.0 : errors[static_cast<size_t>(q * (errors.size() - 1))];
+    };
+    const double rms = n > 0 ? std::sqrt(sum2 / n) : 0.0;
+    nlohmann::json truth = sim::TruthJson(twin->world(), twin->rig(), {});
+    truth["range"] = {{"rms_to_surface_m", rms},
+                      {"median_to_surface_m", percentile(0.5)},
+                      {"p99_to_surface_m", percentile(0.99)},
+                      {"beyond_5mm", beyond_5mm},
+                      {"mode", o.single_camera ? "single_camera" : "stereo"}};
+    report["truth"] = truth;
+    truth_line = fmt::format(
+        "; to the true surfaces RMS {:.3f} mm, median {:.3f} mm, 99th percentile {:.3f} mm, {} "
+        "beyond 5 mm",
+        1e3 * rms, 1e3 * percentile(0.5), 1e3 * percentile(0.99), beyond_5mm);
+  }
 
   scan::WritePly(result.range, out.Path("range.ply"));
   scan::WriteRangePng(result.range, out.Path("range.png"));
   WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
   out.Commit();
-  spdlog::info(
-      "scan: {} points, {} rejected rows; to the true surfaces RMS {:.3f} mm, median "
-      "{:.3f} mm, 99th percentile {:.3f} mm, {} beyond 5 mm; scan {:.2f} s, total {:.2f} "
-      "s; wrote {}",
-      result.points, result.rejected, n > 0 ? 1e3 * std::sqrt(sum2 / n) : 0.0,
-      1e3 * percentile(0.5), 1e3 * percentile(0.99), beyond_5mm, scan_s, Seconds(t0), o.out_dir);
+  spdlog::info("scan: {} points, {} rejected rows{}; scan {:.2f} s, total {:.2f} s; wrote {}",
+               result.points, result.rejected, truth_line, scan_s, Seconds(t0), o.out_dir);
   return 0;
 }
 

@@ -19,6 +19,7 @@
 
 #include "common/error.h"
 #include "common/yaml_file.h"
+#include "common/yaml_reader.h"
 #include "common/yaml_util.h"
 
 namespace hgrasp::robot {
@@ -55,67 +56,18 @@ std::string Exact(double v) {
 // ---------------------------------------------------------------------------------------------
 // The reader: every check names "FILE:LINE", the field path, the value and what was expected.
 
-struct Entry {
-  YAML::Node key, value;
-};
-using Entries = std::map<std::string, Entry>;
+using yaml::Entries;
 
-class Reader {
+// The common reader (common/yaml_reader.h) and what these files need beyond it.
+class Reader : public yaml::Reader {
  public:
-  explicit Reader(std::string path) : path_(std::move(path)) {}
-
-  [[noreturn]] void Fail(const YAML::Mark& mark, const std::string& field, const std::string& value,
-                         const std::string& expected) const {
-    throw InputError(Where(mark), field, value, expected);
-  }
-
-  [[noreturn]] void Fail(const YAML::Node& at, const std::string& field,
-                         const std::string& expected) const {
-    Fail(at.Mark(), field, Render(at), expected);
-  }
+  using yaml::Reader::Reader;
 
   // The file's single YAML document, a map.
   YAML::Node Root(const std::string& text, const std::string& expected) const {
-    const YAML::Node root = yaml::LoadDocument(text, path_, expected);
+    const YAML::Node root = yaml::LoadDocument(text, path(), expected);
     if (!root.IsMap()) Fail(root, "top level", expected);
     return root;
-  }
-
-  // Checks that `n` is a map whose keys are all in `allowed`, each once; returns its entries.
-  Entries MapOf(const YAML::Node& n, const std::string& field, const Keys& allowed,
-                const std::string& expected) const {
-    if (!n.IsMap()) Fail(n, field.empty() ? "top level" : field, expected);
-    Entries entries;
-    for (const auto& kv : n) {
-      const YAML::Node& key = kv.first;
-      const std::string name = key.IsScalar() ? key.Scalar() : Render(key);
-      bool known = false;
-      for (std::string_view a : allowed) known = known || name == a;
-      if (!key.IsScalar() || !known) {
-        Fail(key.Mark(), Join(field, name), name, "a known key here, " + OneOf(allowed));
-      }
-      if (entries.count(name) != 0) {
-        Fail(key.Mark(), Join(field, name), name,
-             "each key once (it is also on line " +
-                 std::to_string(entries.at(name).key.Mark().line + 1) + ")");
-      }
-      entries.emplace(name, Entry{key, kv.second});
-    }
-    return entries;
-  }
-
-  // The value of `key` in `map`; missing names the map's line.
-  const YAML::Node& Require(const Entries& entries, const YAML::Node& map, const std::string& field,
-                            std::string_view key, const std::string& expected) const {
-    const auto it = entries.find(std::string(key));
-    if (it == entries.end()) Fail(map.Mark(), Join(field, key), "", expected);
-    return it->second.value;
-  }
-
-  double Number(const YAML::Node& n, const std::string& field, const std::string& expected) const {
-    const std::optional<double> v = ParseNumber(n);
-    if (!v) Fail(n, field, expected + QuoteHint(n));
-    return *v;
   }
 
   long long Integer(const YAML::Node& n, const std::string& field,
@@ -127,26 +79,8 @@ class Reader {
 
   Eigen::Vector3d Vector3(const YAML::Node& n, const std::string& field,
                           const std::string& expected) const {
-    if (!n.IsSequence() || n.size() != 3) Fail(n, field, expected);
-    Eigen::Vector3d v;
-    for (int i = 0; i < 3; ++i) {
-      const std::optional<double> x = ParseNumber(n[i]);
-      if (!x) Fail(n, field, expected + QuoteHint(n));
-      v[i] = *x;
-    }
-    return v;
+    return Numbers(n, field, 3, expected);
   }
-
-  std::string Text(const YAML::Node& n, const std::string& field,
-                   const std::string& expected) const {
-    if (!n.IsScalar() || n.Scalar().empty()) Fail(n, field, expected);
-    return n.Scalar();
-  }
-
- private:
-  std::string Where(const YAML::Mark& mark) const { return yaml::Where(path_, mark); }
-
-  std::string path_;
 };
 
 // Runs `parse`, turning anything yaml-cpp throws beyond a syntax error into an InputError.
@@ -372,7 +306,10 @@ void SaveLaserCalibration(const LaserCalibration& c, const std::string& path) {
   HGRASP_DEMAND_MSG(problem.empty(), "laser calibration " + field + ": expected " + problem);
 
   const auto vec = [](const Eigen::Vector3d& v) {
-    return "[" + Exact(v.x()) + ", " + Exact(v.y()) + ", " + Exact(v.z()) + "]";
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "[" + std::string.
+    std::string s("[");
+    s.append(Exact(v.x())).append(", ").append(Exact(v.y())).append(", ").append(Exact(v.z()));
+    return s.append("]");
   };
   std::string text;
   text +=

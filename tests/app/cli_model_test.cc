@@ -108,7 +108,8 @@ TEST(CliModelTest, TargetColourNotSeenExitsOneNamingIt) {
   EXPECT_EQ(r.status, 1) << r.output;
   const nlohmann::json report = ReadJson(out / "report.json");
   EXPECT_FALSE(report["ok"].get<bool>());
-  EXPECT_EQ(report["failure"], "no red box found");
+  EXPECT_EQ(report["failure"], "no_target");
+  EXPECT_EQ(report["failure_detail"], "no red box found");
   EXPECT_TRUE(report["target"].is_null());
   EXPECT_EQ(report["boxes"].size(), 1u);
 }

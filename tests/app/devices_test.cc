@@ -66,9 +66,10 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
                       << "}\n"
                          "  cameras: {driver: sim}\n";
   const sim::Scenario scenario = sim::LoadScenario(file.string());
-  EXPECT_FALSE(AllSimulated(scenario));
-  sim::SimRobot robot(scenario);
-  device::RobotDevices dev = MakeDevices(scenario, &robot);
+  Robot robot = OpenRobot(scenario);
+  EXPECT_EQ(robot.truth(), nullptr);  // not every device is the twin's
+  ASSERT_NE(robot.twin, nullptr);     // but some are
+  device::RobotDevices& dev = robot.devices;
 
   // Which backend each device got.
   EXPECT_NE(dynamic_cast<drivers::Val2Arm*>(dev.arm[0].get()), nullptr);
@@ -121,9 +122,8 @@ TEST(MakeDevices, APortThatCannotBeOpenedIsBadInputNamingTheField) {
   std::ofstream(file)
       << "name: no_port\ndevices:\n  head: {driver: biclops, port: /nonexistent/tty}\n";
   const sim::Scenario scenario = sim::LoadScenario(file.string());
-  sim::SimRobot robot(scenario);
   try {
-    MakeDevices(scenario, &robot);
+    OpenRobot(scenario);
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(e.file(), file.string() + ":3");  // the head's entry
@@ -131,8 +131,8 @@ TEST(MakeDevices, APortThatCannotBeOpenedIsBadInputNamingTheField) {
     EXPECT_EQ(e.value(), "/nonexistent/tty");
     EXPECT_NE(std::string(e.what()).find("No such file"), std::string::npos) << e.what();
   }
-  EXPECT_TRUE(AllSimulated(
-      sim::LoadScenario(std::string(HGRASP_TEST_DATA) + "/scenarios/good_minimal.yaml")));
+  EXPECT_TRUE(sim::LoadScenario(std::string(HGRASP_TEST_DATA) + "/scenarios/good_minimal.yaml")
+                  .devices.AllSimulated());
 }
 
 }  // namespace

@@ -107,7 +107,7 @@ void ExpectSame(const Scenario& a, const Scenario& b, double tol) {
   EXPECT_EQ(a.ambient, b.ambient);
   EXPECT_EQ(a.wall_x.has_value(), b.wall_x.has_value());
   EXPECT_EQ(a.interference.size(), b.interference.size());
-  EXPECT_EQ(a.devices.size(), b.devices.size());
+  EXPECT_EQ(a.devices.entries.size(), b.devices.entries.size());
   ASSERT_EQ(a.objects.size(), b.objects.size());
   for (std::size_t i = 0; i < a.objects.size(); ++i) {
     const ObjectSpec &p = a.objects[i], &q = b.objects[i];
@@ -173,7 +173,7 @@ TEST(RandomSceneTest, TwoHundredSeedsMeetEveryConstraint) {
     noise_max = std::max(noise_max, s.camera_noise);
     EXPECT_FALSE(s.wall_x.has_value());
     EXPECT_TRUE(s.interference.empty());
-    EXPECT_TRUE(s.devices.empty());
+    EXPECT_TRUE(s.devices.entries.empty());
 
     const std::vector<std::string> colors = RandomSceneColorNames(s);
     ASSERT_EQ(colors.size(), s.objects.size());

@@ -74,7 +74,7 @@ TEST(ScenarioTest, MinimalTakesDefaults) {
   EXPECT_TRUE(s.objects.empty());
   EXPECT_TRUE(s.interference.empty());
   EXPECT_FALSE(s.task.has_value());
-  EXPECT_TRUE(s.devices.empty());
+  EXPECT_TRUE(s.devices.entries.empty());
 }
 
 TEST(ScenarioTest, FullBlockStyleValues) {
@@ -123,26 +123,32 @@ TEST(ScenarioTest, FullBlockStyleValues) {
   EXPECT_EQ(s.task->target_color, "");
   EXPECT_EQ(s.task->lift_m, 0.08);
 
-  ASSERT_EQ(s.devices.size(), 5u);
-  const DeviceSpec& head = s.devices.at("head");
-  EXPECT_EQ(head.driver, "biclops");
-  EXPECT_EQ(head.port, "/dev/ttyS1");
-  EXPECT_EQ(head.baud, 9600);  // the driver's default
-  EXPECT_EQ(head.framing, "8N1");
-  EXPECT_TRUE(head.serial());
-  const DeviceSpec& arm = s.devices.at("arm_left");
-  EXPECT_EQ(arm.driver, "val2");
-  EXPECT_EQ(arm.baud, 19200);
-  EXPECT_EQ(arm.framing, "7E2");
+  ASSERT_EQ(s.devices.entries.size(), 5u);
+  using drivers::Parity;
+  const auto* head = s.devices.Backend<drivers::BiclopsBackend>("head");
+  ASSERT_NE(head, nullptr);
+  EXPECT_EQ(s.devices.Find("head")->driver(), "biclops");
+  EXPECT_EQ(head->serial.port, "/dev/ttyS1");
+  EXPECT_EQ(head->serial.baud, 9600);  // the driver's default
+  EXPECT_EQ(drivers::Framing(head->serial), "8N1");
+  EXPECT_NE(s.devices.Find("head")->serial(), nullptr);
+  const auto* arm = s.devices.Backend<drivers::Val2Backend>("arm_left");
+  ASSERT_NE(arm, nullptr);
+  EXPECT_EQ(arm->serial.baud, 19200);
+  EXPECT_EQ(arm->serial.data_bits, 7);
+  EXPECT_EQ(arm->serial.parity, Parity::kEven);
+  EXPECT_EQ(arm->serial.stop_bits, 2);
   // The laser and the LEDs share one board, hence one port.
-  EXPECT_EQ(s.devices.at("laser").port, "/dev/ttyUSB0");
-  EXPECT_EQ(s.devices.at("leds").port, "/dev/ttyUSB0");
-  EXPECT_EQ(s.devices.at("leds").baud, 115200);
-  const DeviceSpec& cameras = s.devices.at("cameras");
-  EXPECT_EQ(cameras.driver, "gstreamer");
-  EXPECT_FALSE(cameras.serial());
-  EXPECT_EQ(cameras.left, "v4l2src device=/dev/video0 ! videoconvert ! appsink");
-  EXPECT_EQ(cameras.right, "v4l2src device=/dev/video1 ! videoconvert ! appsink");
+  EXPECT_EQ(s.devices.Backend<drivers::LaserBoardBackend>("laser")->serial.port, "/dev/ttyUSB0");
+  EXPECT_EQ(s.devices.Backend<drivers::LaserBoardBackend>("leds")->serial.port, "/dev/ttyUSB0");
+  EXPECT_EQ(s.devices.Backend<drivers::LaserBoardBackend>("leds")->serial.baud, 115200);
+  const auto* cameras = s.devices.Backend<drivers::GstreamerBackend>("cameras");
+  ASSERT_NE(cameras, nullptr);
+  EXPECT_EQ(s.devices.Find("cameras")->serial(), nullptr);
+  EXPECT_EQ(cameras->cameras.left, "v4l2src device=/dev/video0 ! videoconvert ! appsink");
+  EXPECT_EQ(cameras->cameras.right, "v4l2src device=/dev/video1 ! videoconvert ! appsink");
+  EXPECT_FALSE(s.devices.AllSimulated());
+  EXPECT_TRUE(s.devices.AnySimulated());  // the arm_right and both hands
 }
 
 TEST(ScenarioTest, JsonFlowStyle) {
@@ -163,7 +169,7 @@ TEST(ScenarioTest, JsonFlowStyle) {
   EXPECT_EQ(s.task->target_color, "blue");
   EXPECT_EQ(s.task->target_name, "");
   EXPECT_EQ(s.task->lift_m, 0.05);  // default
-  EXPECT_TRUE(s.devices.empty());
+  EXPECT_TRUE(s.devices.entries.empty());
 }
 
 TEST(ScenarioTest, TouchingAndEdgeOfTableAreValid) {
