@@ -153,6 +153,11 @@ class SimHead final : public device::Head {
     return Status::kOk;
   }
 
+  Status Stop() override {
+    world_->StopMotion(actuator_);
+    return Status::kOk;
+  }
+
   static device::HeadJoints Joints(const World* world) {
     return {world->JointPosition("head_pan"), world->JointPosition("head_tilt"),
             world->JointPosition("head_verge_left")};
@@ -190,6 +195,11 @@ class SimStripeLaser final : public device::StripeLaser {
     const double speed =
         std::min(speed_counts_s * kLaserRadPerCount, world_->SpeedLimit(actuator_));
     world_->StartMotion({actuator_}, {goal}, {speed}, true);
+    return Status::kOk;
+  }
+
+  Status Stop() override {
+    world_->StopMotion({actuator_});
     return Status::kOk;
   }
 

@@ -31,6 +31,8 @@ Status BoardStripeLaser::MoveTo(std::int32_t count, double speed_counts_s) {
   return board_->MotorGoTo(count, wire);
 }
 
+Status BoardStripeLaser::Stop() { return board_->SetMotorVelocity(0); }
+
 BoardLeds::BoardLeds(std::shared_ptr<LaserBoard> board) : board_(std::move(board)) {
   HGRASP_DEMAND(board_ != nullptr);
 }

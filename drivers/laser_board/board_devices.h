@@ -23,6 +23,8 @@ class BoardStripeLaser final : public device::StripeLaser {
   /// max_speed_counts_s) as in the simulation and rounded to whole counts/s (at least 1); the
   /// board rejects a count outside its travel (kRejected).
   device::Status MoveTo(std::int32_t count, double speed_counts_s) override;
+  /// SET_MOTOR_VELOCITY 0: the motor stops where it is.
+  device::Status Stop() override;
 
  private:
   std::shared_ptr<LaserBoard> board_;

@@ -1,5 +1,7 @@
 #include "app/devices.h"
 
+#include <spdlog/spdlog.h>
+
 #include "biclops/biclops_head.h"
 #include "camera/gst_stereo_camera.h"
 #include "common/error.h"
@@ -36,6 +38,17 @@ std::unique_ptr<drivers::ByteLink> OpenPort(const sim::Scenario& s, const std::s
 }
 
 }  // namespace
+
+Robot::~Robot() {
+  if (!left_safe_) LeaveSafe();
+}
+
+SafeStopReport Robot::LeaveSafe() {
+  left_safe_ = true;
+  SafeStopReport report = app::LeaveSafe(devices);
+  if (!report.ok()) spdlog::error("safe stop: {}", report.Failures());
+  return report;
+}
 
 Robot OpenRobot(const sim::Scenario& scenario) {
   Robot robot;

@@ -9,22 +9,36 @@
 #include <memory>
 #include <string>
 
+#include "app/safe_stop.h"
 #include "device/robot_devices.h"
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
 
 namespace hgrasp::app {
 
-/// The robot a command works with.
+/// The robot a command works with. It is left safe (LeaveSafe) when the command is done; if
+/// the command never gets there (an exception), its destructor does it.
 struct Robot {
-  /// The simulated robot; null when every device is real.
+  Robot() = default;
+  Robot(Robot&&) = default;
+  Robot& operator=(Robot&&) = delete;
+  ~Robot();
+
+  /// The simulated robot; null when every device is real. Declared first: the simulated
+  /// devices refer to it, so it goes last.
   std::unique_ptr<sim::SimRobot> twin;
   device::RobotDevices devices;
+  bool all_simulated = false;
 
   /// The twin when every device is simulated: only then does its ground truth describe what
   /// the devices saw (and may go into reports). Else nullptr.
   sim::SimRobot* truth() const { return all_simulated ? twin.get() : nullptr; }
-  bool all_simulated = false;
+
+  /// app::LeaveSafe on the devices (safe_stop.h); logs what did not take it.
+  SafeStopReport LeaveSafe();
+
+ private:
+  bool left_safe_ = false;
 };
 
 /// The devices of `scenario`, opened: the twin built only when some device is simulated.

@@ -227,19 +227,25 @@ namespace {
 int LookAndPlan(const ModelOptions& o, bool plan) {
   const auto t0 = Clock::now();
   const sim::Scenario scenario = sim::LoadScenario(o.scenario);
-  const task::TaskConfig config = TaskConfigFor(scenario);
+  task::TaskConfig config = TaskConfigFor(scenario);
   task::RobotModel robot_model = task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
   OutputDir out(o.out_dir);
+  const StopSignals signals;
+  config.stop = signals.request();
   Robot robot = OpenRobot(scenario);
   device::RobotDevices& dev = robot.devices;
   task::GraspTask task(&dev, robot_model, config);
   const bool ok = task.Look() && (!plan || task.Plan());
+  const SafeStopReport safe = robot.LeaveSafe();
   const task::TaskResult& r = task.result();
   nlohmann::json report =
       LookReport(scenario, robot.truth(), r, robot_model, plan, out.staging());
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
+  report["failed_device"] =
+      r.failed_device.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.failed_device);
+  report["safe_stop"] = safe.Json();
   nlohmann::json timing = {{"total", Seconds(t0)}};
   if (r.scene) {
     timing["scan"] = r.stages[0].wall_s - r.scene->segment_s - r.scene->model_s;

@@ -66,10 +66,12 @@ nlohmann::json ErrorJson(const servo::ServoError& e) {
 int Run(const RunOptions& o) {
   const auto t0 = Clock::now();
   const sim::Scenario scenario = sim::LoadScenario(o.scenario);
-  const task::TaskConfig config = TaskConfigFor(scenario);
+  task::TaskConfig config = TaskConfigFor(scenario);
   const task::RobotModel robot_model =
       task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
   OutputDir out_dir(o.out_dir);
+  const StopSignals signals;
+  config.stop = signals.request();
   Robot robot = OpenRobot(scenario);
   device::RobotDevices& dev = robot.devices;
   sim::SimRobot* const truth = robot.truth();  // null unless every device is simulated
@@ -122,6 +124,8 @@ int Run(const RunOptions& o) {
     }
     return task.Plan() && task.Approach() && task.Servo() && task.Close() && task.Lift();
   }();
+  // Whatever happened, the robot is left safe before anything is written (DESIGN.md rule 8).
+  const SafeStopReport safe = robot.LeaveSafe();
   const task::TaskResult& r = task.result();
 
   nlohmann::json report =
@@ -129,6 +133,9 @@ int Run(const RunOptions& o) {
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
+  report["failed_device"] =
+      r.failed_device.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.failed_device);
+  report["safe_stop"] = safe.Json();
   report["result"] = {{"lifted", r.lifted}, {"lift_height", r.lift_height_m}};
   nlohmann::json phases = nlohmann::json::array();
   for (const task::ServoPhase& p : r.servo) {

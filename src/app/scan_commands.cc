@@ -60,16 +60,27 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
     if (p == p.parent_path()) break;
   }
   const auto head = Head();
+  const StopSignals signals;
   Robot robot = OpenRobot(scenario);
   device::RobotDevices& dev = robot.devices;
   scan::LaserCalibrationReport report;
-  const scan::SweepConfig sweep;
+  scan::SweepConfig sweep;
+  sweep.stop = signals.request();
   const std::optional<robot::LaserCalibration> calibrated =
       scan::CalibrateLaser(dev, head, cameras, sweep, {}, &report);
+  // The head's angles for the truth below are read before the safe stop.
+  device::HeadState hs;
+  const device::Status head_read = calibrated ? dev.head->Read(&hs) : device::Status::kOk;
+  robot.LeaveSafe();
   if (!calibrated) {
     // Nothing is written: a calibration below its stated quality, or none at all.
-    spdlog::error("calibrate laser: {}{}; {} not written", report.failed_device.empty() ? "" : "device_error: ",
-                  report.failure, o.out_file);
+    const char* kind = report.status == device::Status::kInterrupted ? "interrupted: "
+                       : report.failed_device.empty()                ? ""
+                                                                     : "device_error: ";
+    const std::string failure = report.status == device::Status::kInterrupted
+                                    ? signals.request()->Reason() + " during the sweep"
+                                    : report.failure;
+    spdlog::error("calibrate laser: {}{}; {} not written", kind, failure, o.out_file);
     return 1;
   }
   const robot::LaserCalibration& cal = *calibrated;
@@ -87,8 +98,7 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   if (robot.truth() == nullptr) return 0;
 
   // Ground truth: the calibrated plane against the simulator's at every count of the sweep.
-  device::HeadState hs;
-  if (dev.head->Read(&hs) != device::Status::kOk) return 0;  // written; no truth to add
+  if (head_read != device::Status::kOk) return 0;  // written; no truth to add
   const Pose3 X_WH = head.X_WH(hs.q);
   const std::int32_t lo = std::min(sweep.start_count, sweep.end_count);
   const std::int32_t hi = std::max(sweep.start_count, sweep.end_count);
@@ -107,27 +117,39 @@ int Scan(const ScanOptions& o) {
   const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
   const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
   OutputDir out(o.out_dir);
+  const StopSignals signals;
   Robot robot = OpenRobot(scenario);
   device::RobotDevices& dev = robot.devices;
   scan::StripeFrameConfig config;
   config.stereo = !o.single_camera;
   scan::Scanner scanner(Head(), cameras, laser, config);
+  scan::SweepConfig sweep;
+  sweep.stop = signals.request();
   const auto t_scan = std::chrono::steady_clock::now();
-  const scan::ScanResult result = scanner.Scan(dev, {});
+  const scan::ScanResult result = scanner.Scan(dev, sweep);
   const double scan_s = Seconds(t_scan);
+  const SafeStopReport safe = robot.LeaveSafe();
   if (result.status != device::Status::kOk) {
-    // A device failed: the report says which and what it said; there is no range to write.
-    const std::string detail = result.failed_device + ": " +
-                               std::string(device::ToString(result.status)) + " during the scan";
+    // A device failed or a stop signal came: the report says which and what it said; there is
+    // no range to write.
+    const bool interrupted = result.status == device::Status::kInterrupted;
+    const std::string failure = interrupted ? "interrupted" : "device_error";
+    const std::string detail =
+        interrupted ? signals.request()->Reason() + " during the scan"
+                    : result.failed_device + ": " + std::string(device::ToString(result.status)) +
+                          " during the scan";
     nlohmann::json report = {{"scenario", scenario.name},
                              {"seed", scenario.seed},
                              {"ok", false},
-                             {"failure", "device_error"},
+                             {"failure", failure},
                              {"failure_detail", detail},
+                             {"failed_device", interrupted ? nlohmann::json(nullptr)
+                                                           : nlohmann::json(result.failed_device)},
+                             {"safe_stop", safe.Json()},
                              {"timing_s", {{"scan", scan_s}, {"total", Seconds(t0)}}}};
     WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
     out.Commit();
-    spdlog::error("scan: device_error: {}; wrote {}", detail, o.out_dir);
+    spdlog::error("scan: {}: {}; wrote {}", failure, detail, o.out_dir);
     return 1;
   }
 
@@ -138,6 +160,7 @@ int Scan(const ScanOptions& o) {
   report["failure"] = nullptr;
   report["range"] = {{"points", result.points}, {"rejected", result.rejected}};
   report["timing_s"] = {{"scan", scan_s}, {"total", Seconds(t0)}};
+  report["safe_stop"] = safe.Json();
   std::string truth_line;
   if (sim::SimRobot* twin = robot.truth()) {
     // Ground truth (only when every device is the twin's: then what the devices saw is the

@@ -26,6 +26,8 @@ class Head {
   virtual Status Read(HeadState* state) = 0;
   /// Move every axis to its target at the axis speed limits.
   virtual Status MoveTo(const HeadJoints& target) = 0;
+  /// Stop every axis where it is (the safe stop, DESIGN.md rule 8).
+  virtual Status Stop() = 0;
 };
 
 }  // namespace hgrasp::device

@@ -14,6 +14,8 @@ std::string_view ToString(Status s) {
       return "rejected";
     case Status::kDisconnected:
       return "disconnected";
+    case Status::kInterrupted:
+      return "interrupted";
   }
   return "unknown";
 }

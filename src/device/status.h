@@ -11,6 +11,9 @@ enum class Status {
   kBadReply,      ///< a reply arrived but failed its checksum or could not be parsed
   kRejected,      ///< the device refused the command (out of range, not ready)
   kDisconnected,  ///< the link is gone
+  /// Not the device's doing: the caller gave up waiting because a stop was requested
+  /// (SIGINT, SIGTERM; common/stop_request.h).
+  kInterrupted,
 };
 
 std::string_view ToString(Status s);

@@ -23,6 +23,8 @@ class StripeLaser {
   /// Turn the motor to an encoder count at `speed_counts_s` (> 0). A scan is a MoveTo across the
   /// scene while frames are grabbed: each frame latches the count at its exposure.
   virtual Status MoveTo(std::int32_t count, double speed_counts_s) = 0;
+  /// Stop the motor where it is (the safe stop, DESIGN.md rule 8; the laser stays as it is).
+  virtual Status Stop() = 0;
 };
 
 }  // namespace hgrasp::device

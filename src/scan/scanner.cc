@@ -18,12 +18,16 @@ constexpr double kSlewCountsPerS = 9000;  // fast move to the start of a sweep
 // Grabs frames until the laser stops; the last frame has it at rest. `failed`: the device whose
 // status ended it.
 device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* frame,
-                            std::string* failed) {
+                            const StopRequest* stop, std::string* failed) {
   device::StripeLaserState s;
   for (int i = 0; i < 1000; ++i) {
     if (const auto st = dev.cameras->Grab(frame); st != device::Status::kOk) {
       *failed = "cameras";
       return st;
+    }
+    if (StopRequested(stop)) {
+      *failed = "";
+      return device::Status::kInterrupted;
     }
     if (const auto st = dev.laser->Read(&s); st != device::Status::kOk) {
       *failed = "laser";
@@ -63,7 +67,7 @@ device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
     *failed = "laser";
     return st;
   }
-  if (auto st = WaitForLaser(dev, &frame, failed); st != device::Status::kOk) return st;
+  if (auto st = WaitForLaser(dev, &frame, sweep.stop, failed); st != device::Status::kOk) return st;
   const double speed =
       std::abs(sweep.end_count - sweep.start_count) / (sweep.positions * kFramePeriodS);
   if (auto st = dev.laser->MoveTo(sweep.end_count, speed); st != device::Status::kOk) {
@@ -77,6 +81,10 @@ device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
       return st;
     }
     on_frame(frame);
+    if (StopRequested(sweep.stop)) {
+      *failed = "";
+      return device::Status::kInterrupted;
+    }
     if (auto st = dev.laser->Read(&s); st != device::Status::kOk) {
       *failed = "laser";
       return st;
@@ -151,10 +159,12 @@ void Scanner::ProcessFrame(const device::StereoFrame& frame, const device::Stere
 ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
   ScanResult out;
   // A device that fails ends the scan; the laser is told to go off whatever it said before.
+  // What it answers is not kept: the failure is reported as it is, and the composition root's
+  // safe stop turns the laser off again and reports that.
   const auto failed = [&](const std::string& device, device::Status st) {
     out.status = st;
     out.failed_device = device;
-    dev.laser->SetLaser(false);
+    static_cast<void>(dev.laser->SetLaser(false));
     return out;
   };
   device::StereoFrame ambient;
@@ -212,7 +222,8 @@ std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
   const auto device_failed = [&](const std::string& device, device::Status st) {
     report.failed_device = device;
     report.status = st;
-    report.failure = device + ": " + std::string(device::ToString(st));
+    report.failure =
+        device.empty() ? std::string(device::ToString(st)) : device + ": " + std::string(device::ToString(st));
     return std::nullopt;
   };
   const auto below = [&](const std::string& why) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <opencv2/core/mat.hpp>
 
+#include "common/stop_request.h"
 #include "device/robot_devices.h"
 #include "robot/calibration.h"
 #include "robot/head_kinematics.h"
@@ -24,6 +25,9 @@ struct SweepConfig {
   std::int32_t start_count = 2400;  ///< +24 deg: the workspace's left edge and beyond
   std::int32_t end_count = -2400;   ///< -24 deg: its right edge
   int positions = 300;              ///< 12 s at 25 frames/s
+  /// Polled at every frame: when requested the sweep ends with Status::kInterrupted (the
+  /// caller leaves the robot safe). May be null.
+  const StopRequest* stop = nullptr;
 };
 
 struct ScanResult {

@@ -67,6 +67,7 @@ std::vector<LedPoint> GripperTracker::Points(const device::StereoFrame& frame) {
 
 TrackerStatus GripperTracker::Grab(device::StereoCamera& camera, device::StereoFrame* frame) {
   device_status_ = camera.Grab(frame);
+  failed_device_ = "cameras";
   if (!device::Ok(device_status_)) return TrackerStatus::kDeviceError;
   ++frames_;
   return TrackerStatus::kOk;
@@ -74,6 +75,7 @@ TrackerStatus GripperTracker::Grab(device::StereoCamera& camera, device::StereoF
 
 TrackerStatus GripperTracker::SetLeds(device::Leds& leds, std::uint32_t mask) {
   device_status_ = leds.Set(side_, mask);
+  failed_device_ = "leds";
   return device::Ok(device_status_) ? TrackerStatus::kOk : TrackerStatus::kDeviceError;
 }
 

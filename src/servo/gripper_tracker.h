@@ -119,6 +119,8 @@ class GripperTracker {
   double last_fit_rms() const { return last_fit_rms_; }  ///< m
   double last_nis() const { return last_nis_; }
   device::Status device_status() const { return device_status_; }
+  /// The device of the last call ("cameras" or "leds"): with kDeviceError, the one that failed.
+  std::string_view failed_device() const { return failed_device_; }
 
   std::int64_t frames() const { return frames_; }              ///< frames grabbed or tracked
   std::int64_t flashes() const { return flashes_; }            ///< single-LED flash frames
@@ -173,6 +175,7 @@ class GripperTracker {
   double last_fit_rms_ = 0.0;
   double last_nis_ = 0.0;
   device::Status device_status_ = device::Status::kOk;
+  std::string_view failed_device_ = "cameras";
   std::int64_t frames_ = 0, flashes_ = 0, recoveries_ = 0, measurements_ = 0;
   std::int64_t image_measurements_ = 0;
 };

@@ -36,6 +36,8 @@ std::string_view ToString(Failure f) {
       return "grasp_slipped";
     case Failure::kDeviceError:
       return "device_error";
+    case Failure::kInterrupted:
+      return "interrupted";
   }
   return "unknown";
 }
@@ -159,22 +161,45 @@ bool GraspTask::Fail(Failure f, std::string message) {
   return false;
 }
 
-bool GraspTask::DeviceOk(device::Status s, std::string_view what) {
+bool GraspTask::DeviceOk(device::Status s, std::string_view device, std::string_view what) {
   if (s == device::Status::kOk) return true;
-  return Fail(Failure::kDeviceError, std::string(what) + ": " + std::string(device::ToString(s)));
+  if (s == device::Status::kInterrupted) {
+    return Fail(Failure::kInterrupted,
+                (config_.stop != nullptr ? config_.stop->Reason() : std::string("interrupted")) +
+                    " during the " + std::string(what));
+  }
+  result_.failed_device = device;
+  return Fail(Failure::kDeviceError, std::string(device) + ": " +
+                                         std::string(device::ToString(s)) + " (" +
+                                         std::string(what) + ")");
+}
+
+std::string GraspTask::ArmKey() const {
+  return "arm_" + std::string(device::ToString(result_.plan->side));
+}
+
+std::string GraspTask::HandKey() const {
+  return "hand_" + std::string(device::ToString(result_.plan->side));
 }
 
 bool GraspTask::GrabFrame(bool track) {
   device::StereoFrame frame;
-  if (!DeviceOk(dev_->cameras->Grab(&frame), "camera grab")) return false;
+  if (!DeviceOk(dev_->cameras->Grab(&frame), "cameras", "grab")) return false;
+  if (StopRequested(config_.stop)) {
+    return Fail(Failure::kInterrupted, config_.stop->Reason() + " during the " +
+                                           std::string(stage_));
+  }
   return !track || TrackFrame(frame);
 }
 
-bool GraspTask::WaitUntil(const std::function<bool()>& done, std::string_view what, bool track) {
+bool GraspTask::WaitUntil(const std::function<bool(bool*)>& done, std::string_view what,
+                          bool track) {
   const double t0 = have_frame_ ? last_frame_.t_s : 0.0;
   for (;;) {
     if (!GrabFrame(track)) return false;
-    if (done()) return true;
+    bool finished = false;
+    if (!done(&finished)) return false;
+    if (finished) return true;
     if (last_frame_.t_s - t0 > config_.move_timeout_s) {
       return Fail(Failure::kDeviceError, std::string(what) + " did not end within " +
                                              std::to_string(config_.move_timeout_s) + " s");
@@ -182,19 +207,25 @@ bool GraspTask::WaitUntil(const std::function<bool()>& done, std::string_view wh
   }
 }
 
-bool GraspTask::ArmStill() {
+bool GraspTask::ArmStill(bool* still) {
   device::ArmState s;
-  return dev_->ArmOf(result_.plan->side).Read(&s) == device::Status::kOk && !s.moving;
+  if (!DeviceOk(dev_->ArmOf(result_.plan->side).Read(&s), ArmKey(), "read")) return false;
+  *still = !s.moving;
+  return true;
 }
 
-bool GraspTask::HandStill() {
+bool GraspTask::HandStill(bool* still) {
   device::HandState s;
-  return dev_->HandOf(result_.plan->side).Read(&s) == device::Status::kOk && !s.moving;
+  if (!DeviceOk(dev_->HandOf(result_.plan->side).Read(&s), HandKey(), "read")) return false;
+  *still = !s.moving;
+  return true;
 }
 
-bool GraspTask::HeadStill() {
+bool GraspTask::HeadStill(bool* still) {
   device::HeadState s;
-  return dev_->head->Read(&s) == device::Status::kOk && !s.moving;
+  if (!DeviceOk(dev_->head->Read(&s), "head", "read")) return false;
+  *still = !s.moving;
+  return true;
 }
 
 bool GraspTask::TrackFrame(const device::StereoFrame& frame) {
@@ -210,7 +241,7 @@ bool GraspTask::Recover() {
     const servo::TrackerStatus s = tracker_->Initialise(*dev_->leds, *dev_->cameras);
     if (s == servo::TrackerStatus::kOk) return true;
     if (s == servo::TrackerStatus::kDeviceError) {
-      return DeviceOk(tracker_->device_status(), "LEDs or cameras while flashing");
+      return DeviceOk(tracker_->device_status(), tracker_->failed_device(), "flashing the LEDs");
     }
     if (last_frame_.t_s - t0 > config_.recovery_s) {
       return Fail(Failure::kTrackingLost, "the gripper's LEDs were not found again in " +
@@ -225,10 +256,12 @@ bool GraspTask::AimHead(const Eigen::Vector3d& p_C, bool* moved) {
   const device::HeadJoints q_old = last_frame_.head;  // the joints p_C was measured at
   const servo::HeadTrackingResult aim = head_tracker_.Track(q_old, p_C);
   if (!aim.moved) return true;
-  if (!DeviceOk(dev_->head->MoveTo(aim.q), "head move")) return false;
+  if (!DeviceOk(dev_->head->MoveTo(aim.q), "head", "move")) return false;
   // The cameras move: no gripper measurement until they are still again, and then a few
   // frames more while the axes settle on their set-points.
-  if (!WaitUntil([this] { return HeadStill(); }, "head move", /*track=*/false)) return false;
+  if (!WaitUntil([this](bool* still) { return HeadStill(still); }, "head move", /*track=*/false)) {
+    return false;
+  }
   for (int k = 0; k < config_.settle_frames; ++k) {
     if (!GrabFrame(false)) return false;
   }
@@ -258,11 +291,17 @@ device::Status GraspTask::MoveRelative(device::Arm& arm, const Pose3& X_EEnew) {
 bool GraspTask::Look() {
   BeginStage("look");
   device::HeadState head;
-  if (!DeviceOk(dev_->head->Read(&head), "head read")) return false;
+  if (!DeviceOk(dev_->head->Read(&head), "head", "read")) return false;
   result_.scan_head = head.q;
   scan::Scanner scanner(model_.head, model_.cameras, model_.laser);
-  result_.scan = scanner.Scan(*dev_, config_.sweep);
+  scan::SweepConfig sweep = config_.sweep;
+  if (sweep.stop == nullptr) sweep.stop = config_.stop;
+  result_.scan = scanner.Scan(*dev_, sweep);
+  if (result_.scan->status == device::Status::kInterrupted) {
+    return DeviceOk(result_.scan->status, "", "scan");
+  }
   if (result_.scan->status != device::Status::kOk) {
+    result_.failed_device = result_.scan->failed_device;
     return Fail(Failure::kDeviceError, result_.scan->failed_device + ": " +
                                            std::string(device::ToString(result_.scan->status)) +
                                            " during the scan");
@@ -300,11 +339,17 @@ bool GraspTask::Approach() {
   const grasp::GraspPlan& plan = *result_.plan;
   device::Arm& arm = dev_->ArmOf(plan.side);
   opening_m_ = plan.opening_m;
-  if (!DeviceOk(dev_->HandOf(plan.side).Open(plan.opening_m), "hand open")) return false;
+  if (!DeviceOk(dev_->HandOf(plan.side).Open(plan.opening_m), HandKey(), "open")) return false;
   // Above the pre-grasp first, then down to it: the hand comes onto the box from above.
   for (const device::Joint6* q : {&plan.q_via, &plan.q_pre}) {
-    if (!DeviceOk(arm.MoveJoints(*q), "arm move")) return false;
-    if (!WaitUntil([this] { return ArmStill() && HandStill(); }, "arm move", false)) return false;
+    if (!DeviceOk(arm.MoveJoints(*q), ArmKey(), "move")) return false;
+    const auto still = [this](bool* done) {
+      bool arm_still = false, hand_still = false;
+      if (!ArmStill(&arm_still) || !HandStill(&hand_still)) return false;
+      *done = arm_still && hand_still;
+      return true;
+    };
+    if (!WaitUntil(still, "arm move", false)) return false;
   }
   tracker_.emplace(plan.side, model_.leds.Of(plan.side), model_.cameras, model_.head,
                    config_.tracker);
@@ -353,9 +398,9 @@ bool GraspTask::ServoTo(const Pose3& X_WT, std::string name, std::string_view re
       return Fail(Failure::kUnreachable,
                   "the arm refused the servo move towards the " + phase.name + " (out of reach)");
     }
-    if (!DeviceOk(s, "arm move")) return false;
+    if (!DeviceOk(s, ArmKey(), "move")) return false;
     ++phase.iterations;
-    if (!WaitUntil([this] { return ArmStill(); }, "arm move", true)) return false;
+    if (!WaitUntil([this](bool* still) { return ArmStill(still); }, "arm move", true)) return false;
   }
   phase.sim_s = last_frame_.t_s - t0;
   result_.servo.push_back(phase);
@@ -369,7 +414,7 @@ bool GraspTask::Servo() {
   // Find the gripper and identify its LEDs by flashing them (paper section 6).
   const servo::TrackerStatus s = tracker_->Initialise(*dev_->leds, *dev_->cameras);
   if (s == servo::TrackerStatus::kDeviceError) {
-    return DeviceOk(tracker_->device_status(), "LEDs or cameras while flashing");
+    return DeviceOk(tracker_->device_status(), tracker_->failed_device(), "flashing the LEDs");
   }
   if (s != servo::TrackerStatus::kOk && !Recover()) return false;
   // Look at the gripper and the grasp together.
@@ -389,10 +434,12 @@ bool GraspTask::Servo() {
 bool GraspTask::Close() {
   BeginStage("close");
   const device::Side side = result_.plan->side;
-  if (!DeviceOk(dev_->HandOf(side).Close(config_.grip_force_n), "hand close")) return false;
-  if (!WaitUntil([this] { return HandStill(); }, "hand close", true)) return false;
+  if (!DeviceOk(dev_->HandOf(side).Close(config_.grip_force_n), HandKey(), "close")) return false;
+  if (!WaitUntil([this](bool* still) { return HandStill(still); }, "hand close", true)) {
+    return false;
+  }
   device::HandState hand;
-  if (!DeviceOk(dev_->HandOf(side).Read(&hand), "hand read")) return false;
+  if (!DeviceOk(dev_->HandOf(side).Read(&hand), HandKey(), "read")) return false;
   result_.held_opening_m = hand.opening_m;
   opening_m_ = hand.opening_m;
   if (hand.opening_m < config_.min_held_opening_m) {
@@ -422,8 +469,8 @@ bool GraspTask::Lift() {
     if (s == device::Status::kRejected) {
       return Fail(Failure::kUnreachable, "the arm refused the lift (out of reach)");
     }
-    if (!DeviceOk(s, "arm move")) return false;
-    if (!WaitUntil([this] { return ArmStill(); }, "lift", true)) return false;
+    if (!DeviceOk(s, ArmKey(), "move")) return false;
+    if (!WaitUntil([this](bool* still) { return ArmStill(still); }, "lift", true)) return false;
   }
   // Hold it up.
   const double t_up = last_frame_.t_s;
@@ -435,7 +482,7 @@ bool GraspTask::Lift() {
     result_.lift_height_m = (X_WC * tracker_->pose()).translation().z() - z0;
   }
   device::HandState hand;
-  if (!DeviceOk(dev_->HandOf(side).Read(&hand), "hand read")) return false;
+  if (!DeviceOk(dev_->HandOf(side).Read(&hand), HandKey(), "read")) return false;
   result_.held_opening_m = hand.opening_m;
   Moment("lifted");
   if (hand.opening_m < config_.min_held_opening_m) {

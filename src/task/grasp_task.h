@@ -57,6 +57,7 @@ enum class Failure {
   kServoTimeout,  ///< the servo did not converge within max_iterations
   kGraspSlipped,  ///< the fingers closed on nothing, or the box left the hand while held
   kDeviceError,   ///< a device returned an error status, or a move never ended
+  kInterrupted,   ///< a stop was requested (SIGINT, SIGTERM: TaskConfig::stop)
 };
 
 /// "no_target", "unreachable", ... ("" for kNone).
@@ -71,6 +72,9 @@ struct TaskConfig {
   double hold_s = 2.0;   ///< how long it is held up (s)
 
   scan::SweepConfig sweep;
+  /// Polled at every frame (the scan's sweep included): when requested the stage ends with
+  /// Failure::kInterrupted. May be null.
+  const StopRequest* stop = nullptr;
   model::SceneModelConfig model;
   grasp::GraspConfig grasp;
   servo::GripperTrackerOptions tracker;
@@ -132,6 +136,9 @@ struct StageTiming {
 struct TaskResult {
   Failure failure = Failure::kNone;
   std::string message;  ///< what failed, in words ("" when ok)
+  /// With kDeviceError: the device that failed, by its key in the scenario's devices block
+  /// ("arm_right", "hand_left", "head", "laser", "leds", "cameras").
+  std::string failed_device;
 
   // Look
   std::optional<scan::ScanResult> scan;
@@ -213,14 +220,23 @@ class GraspTask {
   /// Records the failure, ends the stage; returns false.
   bool Fail(Failure f, std::string message);
   /// True for kOk; else fails with device_error naming `what`.
-  bool DeviceOk(device::Status s, std::string_view what);
+  /// kOk: true. Else the task fails: kInterrupted for Status::kInterrupted, else kDeviceError
+  /// naming `device` (a devices key), what it said and `what` was asked.
+  bool DeviceOk(device::Status s, std::string_view device, std::string_view what);
+  /// The devices keys of the planned side's arm and hand: "arm_left", "hand_right", ...
+  std::string ArmKey() const;
+  std::string HandKey() const;
   /// One frame, tracked when `track` and a tracker runs.
   bool GrabFrame(bool track);
   /// Grabs frames until `done` holds (false and device_error after move_timeout_s).
-  bool WaitUntil(const std::function<bool()>& done, std::string_view what, bool track);
-  bool ArmStill();
-  bool HandStill();
-  bool HeadStill();
+  /// Grabs frames until done(&finished) gives finished; false (the task failed) when done
+  /// returns false, a grab fails, a stop is requested, or it takes move_timeout_s.
+  bool WaitUntil(const std::function<bool(bool*)>& done, std::string_view what, bool track);
+  // Whether the device has stopped moving (*still); false when its read failed (the task has
+  // then failed, naming it).
+  bool ArmStill(bool* still);
+  bool HandStill(bool* still);
+  bool HeadStill(bool* still);
   /// Tracks the frame; on loss, flashes the LEDs until found again (or tracking_lost).
   bool TrackFrame(const device::StereoFrame& frame);
   bool Recover();

@@ -27,9 +27,15 @@ class TimingOutLaser : public device::StripeLaser {
   device::Status MoveTo(std::int32_t count, double speed_counts_s) override {
     return Answer() ? inner_->MoveTo(count, speed_counts_s) : device::Status::kTimeout;
   }
+  device::Status Stop() override {
+    ++stops_;
+    return Answer() ? inner_->Stop() : device::Status::kTimeout;
+  }
 
   /// Every SetLaser argument, in order.
   const std::vector<bool>& set() const { return set_; }
+  /// Stop calls.
+  int stops() const { return stops_; }
 
  private:
   bool Answer() { return answers_-- > 0; }
@@ -37,6 +43,7 @@ class TimingOutLaser : public device::StripeLaser {
   std::unique_ptr<device::StripeLaser> inner_;
   int answers_;
   std::vector<bool> set_;
+  int stops_ = 0;
 };
 
 }  // namespace hgrasp::testing

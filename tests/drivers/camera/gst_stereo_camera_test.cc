@@ -26,6 +26,7 @@ class FixedHead final : public device::Head {
     return Status::kOk;
   }
   Status MoveTo(const device::HeadJoints&) override { return Status::kRejected; }
+  Status Stop() override { return Status::kOk; }
   int reads = 0;
 };
 
