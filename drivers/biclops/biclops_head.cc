@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "common/error.h"
 
@@ -46,6 +47,24 @@ BiclopsOptions DefaultBiclopsOptions() {
   o.axes[0] = {cpr, -kPi, kPi, Deg(150.0), Deg(300.0)};
   o.axes[1] = {cpr, Deg(-60.0), Deg(60.0), Deg(150.0), Deg(80.0)};
   o.axes[2] = {cpr, Deg(-5.0), Deg(25.0), Deg(100.0), Deg(200.0)};
+  // Homing (BiclopsDefault.cfg: pan [homing profile] 50 deg/s, 10 deg/s^2, homeSensorWidth 50
+  // counts, ActiveLow; tilt 15 deg/s, 20 deg/s^2, 860 counts, ActiveHigh; verge: ours).
+  o.axes[0].homing_speed_rad_s = Deg(50.0);
+  o.axes[0].homing_accel_rad_s2 = Deg(10.0);
+  o.axes[0].home_sensor_width_rad = 50.0 / cpr;
+  o.axes[0].home_active_low = true;
+  o.axes[1].homing_speed_rad_s = Deg(15.0);
+  o.axes[1].homing_accel_rad_s2 = Deg(20.0);
+  o.axes[1].home_sensor_width_rad = 860.0 / cpr;
+  o.axes[1].home_active_low = false;
+  o.axes[2].homing_speed_rad_s = Deg(15.0);
+  o.axes[2].homing_accel_rad_s2 = Deg(20.0);
+  o.axes[2].home_sensor_width_rad = 300.0 / cpr;
+  o.axes[2].home_active_low = true;
+  // Run servo filters (BiclopsDefault.cfg [run servo filter]); verge as tilt (ours).
+  o.axes[1].filter_kp = o.axes[2].filter_kp = 200;
+  o.axes[1].filter_kd = o.axes[2].filter_kd = 50;
+  o.axes[1].filter_ki = o.axes[2].filter_ki = 250;
   return o;
 }
 
@@ -67,6 +86,43 @@ BiclopsHead::BiclopsHead(std::unique_ptr<ByteLink> link, const BiclopsOptions& o
             x.max_speed_rad_s, "a positive speed (rad/s)");
     Require(std::isfinite(x.max_accel_rad_s2) && x.max_accel_rad_s2 > 0.0,
             axis + "max_accel_rad_s2", x.max_accel_rad_s2, "a positive acceleration (rad/s^2)");
+    Require(std::isfinite(x.homing_speed_rad_s) && x.homing_speed_rad_s > 0.0,
+            axis + "homing_speed_rad_s", x.homing_speed_rad_s, "a positive speed (rad/s)");
+    Require(std::isfinite(x.homing_accel_rad_s2) && x.homing_accel_rad_s2 > 0.0,
+            axis + "homing_accel_rad_s2", x.homing_accel_rad_s2,
+            "a positive acceleration (rad/s^2)");
+    Require(
+        std::isfinite(x.index_spacing_rad) && std::abs(x.index_spacing_rad * x.counts_per_rad) >= 4,
+        axis + "index_spacing_rad", x.index_spacing_rad,
+        "a positive angle (rad) of at least 4 encoder counts");
+    Require(std::isfinite(x.home_sensor_width_rad) && x.home_sensor_width_rad > 0.0 &&
+                x.home_sensor_width_rad < x.index_spacing_rad,
+            axis + "home_sensor_width_rad", x.home_sensor_width_rad,
+            "a positive angle (rad) below index_spacing_rad");
+    Require(std::isfinite(x.home_offset_rad) && std::abs(x.home_offset_rad) < x.index_spacing_rad,
+            axis + "home_offset_rad", x.home_offset_rad,
+            "a finite angle (rad) within one index spacing");
+    const std::pair<const char*, std::pair<int, std::pair<long, long>>> gains[] = {
+        {"filter_kp", {x.filter_kp, {0, 32767}}},
+        {"filter_kd", {x.filter_kd, {0, 32767}}},
+        {"filter_ki", {x.filter_ki, {0, 32767}}},
+        {"filter_kvff", {x.filter_kvff, {0, 32767}}},
+        {"filter_kaff", {x.filter_kaff, {0, 32767}}},
+        {"filter_kout", {x.filter_kout, {0, 65535}}},
+        {"filter_integration_limit", {x.filter_integration_limit, {0, 2147483647L}}},
+        {"filter_motor_limit", {x.filter_motor_limit, {0, 32767}}},
+        {"filter_motor_bias", {x.filter_motor_bias, {-32768, 32767}}},
+        {"output_mode", {x.output_mode, {0, 2}}},
+    };
+    for (const auto& [name, v] : gains) {
+      Require(v.first >= v.second.first && v.first <= v.second.second, axis + name, v.first,
+              "an integer in " + std::to_string(v.second.first) + ".." +
+                  std::to_string(v.second.second) + " (PMD chip units)");
+    }
+    Require(std::isfinite(x.position_error_limit_rad) && x.position_error_limit_rad >= 0.0 &&
+                x.position_error_limit_rad * std::abs(x.counts_per_rad) < 2.0e9,
+            axis + "position_error_limit_rad", x.position_error_limit_rad,
+            "an angle (rad) of 0 or more that fits the chip's 32-bit register");
     // The longest profile: across the range, from full speed the other way.
     const double v = x.max_speed_rad_s, acc = x.max_accel_rad_s2;
     longest_move_s_ = std::max(longest_move_s_, (x.max_rad - x.min_rad) / v + 3.0 * v / acc);
@@ -201,7 +257,8 @@ Status BiclopsHead::Resync() {
     if (s == Status::kDisconnected) return s;
     if (silent_) return Status::kTimeout;
     bool answered = false;
-    for (int k = 0; k < 8 && !answered; ++k) {
+    // At most one packet's length of zeros completes whatever the chip holds.
+    for (std::size_t k = 0; k < pmd::kMaxCommandBytes && !answered; ++k) {
       s = link_->Write(std::span<const std::uint8_t>(&zero, 1));
       if (s != Status::kOk) return s;
       std::uint8_t buf[16];
@@ -523,6 +580,402 @@ Status BiclopsHead::MoveTo(const device::HeadJoints& target) {
   return Status::kOk;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Configuration and homing (PROTOCOL.md, "Homing")
+
+bool BiclopsHead::homed() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return homed_;
+}
+
+std::string BiclopsHead::last_error() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return last_error_;
+}
+
+Status BiclopsHead::Failed(int axis, const std::string& step, Status s) {
+  if (s == Status::kOk) return s;
+  last_error_ = std::string("biclops ") + kAxisNames[axis] + ": " + step + ": " +
+                std::string(device::ToString(s));
+  return s;
+}
+
+Status BiclopsHead::Command(const pmd::Command& command) {
+  // Configuration Set*s write the same value however often they arrive: a lost or garbled
+  // reply is answered by sending the command again.
+  Status last = Status::kBadReply;
+  for (int attempt = 0; attempt <= options_.max_resends; ++attempt) {
+    Status s = SyncIfNeeded();
+    if (s != Status::kOk) return s;
+    pmd::Reply reply;
+    s = Exchange(command, 0, &reply);
+    if (s == Status::kDisconnected) return s;
+    if (s == Status::kOk && reply.status == pmd::status::kOk) return Status::kOk;
+    need_sync_ = true;
+    if (s == Status::kOk && !pmd::StatusNeedsResync(reply.status)) return Status::kRejected;
+    last = s == Status::kOk ? Status::kRejected : s;
+    if (silent_) return Status::kTimeout;
+    ++counters_.resends;
+  }
+  return last;
+}
+
+Status BiclopsHead::ConfigureAxis(int axis) {
+  // libPMD PMDAxisControl::ConfigureHardware, for a brushed axis without limit sensors, then
+  // SetFilter (the run filter) and the homing profile. Every command here is idempotent.
+  const BiclopsAxisOptions& x = options_.axes[Index(axis)];
+  const auto a = static_cast<std::uint8_t>(axis);
+  const double cpr = std::abs(x.counts_per_rad);
+  // The axis' current position, so that the filter's Update (which also makes the buffered
+  // profile active) does not move it.
+  pmd::Reply reply;
+  Status s = Query(axis, pmd::op::kGetActualPosition, 2, &reply);
+  if (s != Status::kOk) return Failed(axis, "GetActualPosition", s);
+  const auto here = static_cast<std::int32_t>(pmd::ReplyLong(reply));
+  // The amplifier enable (axis-out pin, driven through its signal sense: libPMD EnableAmp),
+  // the home input's sense (so that its status bit reads 1 on the sensor), limit inputs as
+  // they come (active low), the motor's direction as the encoder's.
+  std::uint16_t sense = 0;
+  if (x.home_active_low) sense |= pmd::signal::kHome;
+  if (x.amp_active_low) sense |= pmd::signal::kAxisOut;
+  const auto error_limit =
+      static_cast<std::uint32_t>(std::llround(x.position_error_limit_rad * cpr));
+  const std::pair<const char*, pmd::Command> steps[] = {
+      {"SetMotorMode off", pmd::WithWord(a, pmd::op::kSetMotorMode, pmd::kMotorOff)},
+      {"SetAxisOutSource", pmd::WithWord(a, pmd::op::kSetAxisOutSource, a)},
+      {"SetLimitSwitchMode", pmd::WithWord(a, pmd::op::kSetLimitSwitchMode, 0)},
+      {"SetSignalSense", pmd::WithWord(a, pmd::op::kSetSignalSense, sense)},
+      {"ResetEventStatus", pmd::WithWord(a, pmd::op::kResetEventStatus, 0)},
+      {"SetOutputMode",
+       pmd::WithWord(a, pmd::op::kSetOutputMode, static_cast<std::uint16_t>(x.output_mode))},
+      {"SetProfileMode", pmd::SetProfileMode(a, pmd::kTrapezoidalProfile)},
+      {"SetAxisMode", pmd::WithWord(a, pmd::op::kSetAxisMode, 1)},
+      {"SetKp", pmd::WithWord(a, pmd::op::kSetKp, static_cast<std::uint16_t>(x.filter_kp))},
+      {"SetKd", pmd::WithWord(a, pmd::op::kSetKd, static_cast<std::uint16_t>(x.filter_kd))},
+      {"SetKi", pmd::WithWord(a, pmd::op::kSetKi, static_cast<std::uint16_t>(x.filter_ki))},
+      {"SetKvff", pmd::WithWord(a, pmd::op::kSetKvff, static_cast<std::uint16_t>(x.filter_kvff))},
+      {"SetKaff", pmd::WithWord(a, pmd::op::kSetKaff, static_cast<std::uint16_t>(x.filter_kaff))},
+      {"SetKout", pmd::WithWord(a, pmd::op::kSetKout, static_cast<std::uint16_t>(x.filter_kout))},
+      {"SetIntegrationLimit",
+       pmd::WithLong(a, pmd::op::kSetIntegrationLimit,
+                     static_cast<std::uint32_t>(x.filter_integration_limit))},
+      {"SetMotorLimit",
+       pmd::WithWord(a, pmd::op::kSetMotorLimit, static_cast<std::uint16_t>(x.filter_motor_limit))},
+      {"SetMotorBias",
+       pmd::WithWord(a, pmd::op::kSetMotorBias, static_cast<std::uint16_t>(x.filter_motor_bias))},
+      {"SetPositionErrorLimit", pmd::WithLong(a, pmd::op::kSetPositionErrorLimit, error_limit)},
+      {"SetAutoStopMode", pmd::WithWord(a, pmd::op::kSetAutoStopMode, 0)},
+      {"SetPosition", pmd::SetPosition(a, here)},
+  };
+  for (const auto& [name, command] : steps) {
+    s = Command(command);
+    if (s != Status::kOk) return Failed(axis, name, s);
+  }
+  // The filter takes effect at an Update (libPMD SetFilter); the motor then goes on.
+  s = HomingUpdate(axis, here);
+  if (s != Status::kOk) return Failed(axis, "Update (filter)", s);
+  s = Command(pmd::WithWord(a, pmd::op::kSetMotorMode, pmd::kMotorOn));
+  if (s != Status::kOk) return Failed(axis, "SetMotorMode on", s);
+  return Status::kOk;
+}
+
+Status BiclopsHead::UpdateOnce(int axis, const std::function<Status(bool*)>& took) {
+  const auto a = static_cast<std::uint8_t>(axis);
+  for (int attempt = 0; attempt <= options_.max_resends; ++attempt) {
+    Status s = SyncIfNeeded();
+    if (s != Status::kOk) return s;
+    pmd::Reply reply;
+    s = Exchange(pmd::Update(a), 0, &reply);
+    if (s == Status::kDisconnected) return s;
+    if (s == Status::kOk && reply.status == pmd::status::kOk) return Status::kOk;
+    need_sync_ = true;
+    if (s == Status::kOk && !pmd::StatusNeedsResync(reply.status)) return Status::kRejected;
+    if (silent_) return Status::kTimeout;
+    if (s != Status::kOk) {
+      ++counters_.update_checks;
+      bool executed = false;
+      s = took(&executed);
+      if (s != Status::kOk) return s;
+      if (executed) return Status::kOk;
+    }
+    ++counters_.resends;
+  }
+  return Status::kBadReply;
+}
+
+Status BiclopsHead::HomingUpdate(int axis, std::int32_t target) {
+  // Re-sending an Update of the same buffered profile aims the axis at the same target again;
+  // still, it is re-sent only when the chip shows it did not take the first: not moving, and
+  // its commanded position not at the target.
+  return UpdateOnce(axis, [this, axis, target](bool* executed) {
+    pmd::Reply reply;
+    Status s = Query(axis, pmd::op::kGetActivityStatus, 1, &reply);
+    if (s != Status::kOk) return s;
+    if ((reply.words[0] & pmd::activity::kInMotion) != 0) {
+      *executed = true;
+      return Status::kOk;
+    }
+    s = Query(axis, pmd::op::kGetCommandedPosition, 2, &reply);
+    if (s != Status::kOk) return s;
+    *executed = pmd::ReplyLong(reply) == target;
+    return Status::kOk;
+  });
+}
+
+Status BiclopsHead::HomingMove(int axis, std::int32_t target, int capture, bool* captured,
+                               std::int32_t* capture_counts) {
+  // libPMD PMDAxisControl::MoveWithCaptureInterrupt: a breakpoint on the capture-received event
+  // bit stops the axis smoothly at the first capture.
+  const BiclopsAxisOptions& x = options_.axes[Index(axis)];
+  const auto a = static_cast<std::uint8_t>(axis);
+  const double cpr = std::abs(x.counts_per_rad);
+  Status s;
+  pmd::Reply reply;
+  s = Query(axis, pmd::op::kGetActualPosition, 2, &reply);
+  if (s != Status::kOk) return s;
+  const double distance = std::abs(static_cast<double>(target - pmd::ReplyLong(reply)));
+  if (capture >= 0) {
+    s = Command(pmd::WithWord(a, pmd::op::kSetCaptureSource, static_cast<std::uint16_t>(capture)));
+    if (s != Status::kOk) return s;
+  }
+  s = Command(pmd::WithWord(a, pmd::op::kResetEventStatus, 0));
+  if (s != Status::kOk) return s;
+  if (capture >= 0) {
+    s = Query(axis, pmd::op::kGetCaptureValue, 2, &reply);  // re-arms the capture
+    if (s != Status::kOk) return s;
+    const std::uint16_t bit = pmd::event::kCaptureReceived;
+    const std::uint16_t value_words[] = {0, bit, bit};  // breakpoint 1: mask, wanted state
+    s = Command(pmd::WithWords(a, pmd::op::kSetBreakpointValue, value_words));
+    if (s != Status::kOk) return s;
+    const std::uint16_t bp_words[] = {
+        0, static_cast<std::uint16_t>(a | pmd::kBreakpointSmoothStop << 4 |
+                                      pmd::kBreakpointEventStatus << 8)};
+    s = Command(pmd::WithWords(a, pmd::op::kSetBreakpoint, bp_words));
+    if (s != Status::kOk) return s;
+  }
+  const double v = x.homing_speed_rad_s * cpr, acc = x.homing_accel_rad_s2 * cpr;
+  const double vel_reg = std::max(1.0, std::round(v * cycle_s_ * pmd::kVelocityScale));
+  // At least 2: libPMD ("V2.3 of navigator won't allow acc < 2").
+  const double acc_reg =
+      std::max(2.0, std::round(acc * cycle_s_ * cycle_s_ * pmd::kAccelerationScale));
+  s = Command(pmd::SetVelocity(a, static_cast<std::int32_t>(vel_reg)));
+  if (s == Status::kOk) s = Command(pmd::SetAcceleration(a, static_cast<std::uint32_t>(acc_reg)));
+  if (s == Status::kOk) s = Command(pmd::SetPosition(a, target));
+  if (s == Status::kOk) s = HomingUpdate(axis, target);
+  if (s != Status::kOk) return s;
+  // The sweep's duration at the registers' speed and acceleration, and a margin.
+  const double v_real = vel_reg / pmd::kVelocityScale / cycle_s_;
+  const double a_real = acc_reg / pmd::kAccelerationScale / (cycle_s_ * cycle_s_);
+  const double expected = distance / v_real + 2.0 * v_real / a_real;
+  const Clock::time_point give_up =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                         std::chrono::duration<double>(expected + options_.settle_margin_s));
+  for (;;) {
+    s = Query(axis, pmd::op::kGetActivityStatus, 1, &reply);
+    if (s != Status::kOk) return s;
+    if ((reply.words[0] & pmd::activity::kInMotion) == 0) break;
+    if (StopRequested(stop_)) return Status::kInterrupted;
+    if (Clock::now() > give_up) return Status::kTimeout;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    BeginCall();  // a long sweep is not silence: the chip answers every poll
+  }
+  *captured = false;
+  if (capture >= 0) {
+    const std::uint16_t off[] = {0, static_cast<std::uint16_t>(a)};  // no action, disabled
+    s = Command(pmd::WithWords(a, pmd::op::kSetBreakpoint, off));
+    if (s != Status::kOk) return s;
+    s = Query(axis, pmd::op::kGetEventStatus, 1, &reply);
+    if (s != Status::kOk) return s;
+    if ((reply.words[0] & pmd::event::kCaptureReceived) != 0) {
+      s = Query(axis, pmd::op::kGetCaptureValue, 2, &reply);
+      if (s != Status::kOk) return s;
+      *captured = true;
+      *capture_counts = static_cast<std::int32_t>(pmd::ReplyLong(reply));
+    }
+  }
+  return Status::kOk;
+}
+
+Status BiclopsHead::AdjustPosition(int axis, std::int32_t delta) {
+  // AdjustActualPosition shifts the counter: twice would shift it twice. The axis is at rest,
+  // so a lost reply is resolved by reading the position: shifted or not.
+  const auto a = static_cast<std::uint8_t>(axis);
+  pmd::Reply reply;
+  Status s = Query(axis, pmd::op::kGetActualPosition, 2, &reply);
+  if (s != Status::kOk) return s;
+  const std::int64_t before = pmd::ReplyLong(reply);
+  for (int attempt = 0; attempt <= options_.max_resends; ++attempt) {
+    s = SyncIfNeeded();
+    if (s != Status::kOk) return s;
+    s = Exchange(
+        pmd::WithLong(a, pmd::op::kAdjustActualPosition, static_cast<std::uint32_t>(delta)), 0,
+        &reply);
+    if (s == Status::kDisconnected) return s;
+    if (s == Status::kOk && reply.status == pmd::status::kOk) return Status::kOk;
+    need_sync_ = true;
+    if (s == Status::kOk && !pmd::StatusNeedsResync(reply.status)) return Status::kRejected;
+    if (silent_) return Status::kTimeout;
+    if (s != Status::kOk) {
+      ++counters_.readbacks;
+      s = Query(axis, pmd::op::kGetActualPosition, 2, &reply);
+      if (s != Status::kOk) return s;
+      const std::int64_t now = pmd::ReplyLong(reply);
+      if (std::abs(now - (before + delta)) <= 2) return Status::kOk;  // executed, once
+      if (std::abs(now - before) > 2) return Status::kBadReply;       // moved: unclear
+    }
+    ++counters_.resends;
+  }
+  return Status::kBadReply;
+}
+
+Status BiclopsHead::HomeAxis(int axis) {
+  // libPMD FindHome with homingMode bestWay for an axis with several index pulses per turn and
+  // a home sensor (FindHomeBestWay, FindHomeCenter, FindIndex; the index sweep of
+  // FindHomeWithHomeSensor): the sensor's centre from both of its edges, then the index pulse
+  // within half an encoder cycle of it is the zero.
+  const BiclopsAxisOptions& x = options_.axes[Index(axis)];
+  const double cpr = std::abs(x.counts_per_rad);
+  const auto width =
+      static_cast<std::int32_t>(std::max(2.0, std::round(x.home_sensor_width_rad * cpr)));
+  const auto cycle = static_cast<std::int32_t>(std::round(std::abs(x.index_spacing_rad) * cpr));
+  const auto range = static_cast<std::int32_t>(std::ceil((x.max_rad - x.min_rad) * cpr));
+  pmd::Reply reply;
+  bool got = false;
+  std::int32_t value = 0;
+  Status s = Query(axis, pmd::op::kGetActualPosition, 2, &reply);
+  if (s != Status::kOk) return Failed(axis, "GetActualPosition", s);
+  std::int32_t here = static_cast<std::int32_t>(pmd::ReplyLong(reply));
+  s = Query(axis, pmd::op::kGetSignalStatus, 1, &reply);
+  if (s != Status::kOk) return Failed(axis, "GetSignalStatus", s);
+  if ((reply.words[0] & pmd::signal::kHome) != 0) {
+    // On the sensor: off it first, so that its edge can be captured (FindHomeCenter).
+    s = HomingMove(axis, here - 2 * width, -1, &got, &value);
+    if (s != Status::kOk) return Failed(axis, "moving off the home sensor", s);
+    here -= 2 * width;
+  }
+  // First edge: towards the negative end (libPMD starts homing in - without an absolute
+  // sensor), then the other way over the whole range.
+  int dir = -1;
+  std::int32_t edge[2] = {0, 0};
+  s = HomingMove(axis, here - range, pmd::kCaptureHome, &got, &edge[0]);
+  if (s != Status::kOk) return Failed(axis, "searching the home sensor (-)", s);
+  if (!got) {
+    dir = 1;
+    s = HomingMove(axis, here + range, pmd::kCaptureHome, &got, &edge[0]);
+    if (s != Status::kOk) return Failed(axis, "searching the home sensor (+)", s);
+    if (!got) {
+      last_error_ = std::string("biclops ") + kAxisNames[axis] +
+                    ": no home sensor edge over the whole range (sensor or axis broken?)";
+      return Status::kRejected;
+    }
+  }
+  // Second edge: past the sensor, then back onto it from the other side.
+  s = HomingMove(axis, edge[0] + dir * 3 * width, -1, &got, &value);
+  if (s != Status::kOk) return Failed(axis, "moving past the home sensor", s);
+  s = HomingMove(axis, edge[0] - dir * 2 * width, pmd::kCaptureHome, &got, &edge[1]);
+  if (s != Status::kOk) return Failed(axis, "searching the home sensor's other edge", s);
+  if (!got || std::abs(edge[0] - edge[1]) <= width / 2) {
+    last_error_ = std::string("biclops ") + kAxisNames[axis] +
+                  ": the home sensor's other edge was not found within " +
+                  std::to_string(3 * width) + " counts";
+    return Status::kRejected;
+  }
+  const std::int32_t center = (edge[0] + edge[1]) / 2;
+  // The index: from half an encoder cycle below the centre, one cycle up with index capture.
+  s = HomingMove(axis, center - cycle / 2, -1, &got, &value);
+  if (s != Status::kOk) return Failed(axis, "moving below the home sensor", s);
+  std::int32_t index = 0;
+  s = HomingMove(axis, center + cycle / 2 + cycle / 20, pmd::kCaptureIndex, &got, &index);
+  if (s != Status::kOk) return Failed(axis, "searching the index pulse", s);
+  if (!got) {
+    last_error_ = std::string("biclops ") + kAxisNames[axis] +
+                  ": no index pulse within half an encoder cycle of the home sensor";
+    return Status::kRejected;
+  }
+  // The zero: the index plus the calibrated offset, in encoder counts.
+  const auto zero =
+      static_cast<std::int32_t>(index + std::llround(x.home_offset_rad * x.counts_per_rad));
+  s = AdjustPosition(axis, -zero);
+  if (s != Status::kOk) return Failed(axis, "AdjustActualPosition", s);
+  // Homed: the capture source set to home marks it in the chip (libPMD SetHomedState on a
+  // controller without memory), motion errors stop the axis from now on, and it goes to 0.
+  s = Command(pmd::WithWord(static_cast<std::uint8_t>(axis), pmd::op::kSetCaptureSource,
+                            pmd::kCaptureHome));
+  if (s != Status::kOk) return Failed(axis, "SetCaptureSource (homed)", s);
+  s = HomingMove(axis, 0, -1, &got, &value);
+  if (s != Status::kOk) return Failed(axis, "moving to 0", s);
+  s = Command(pmd::WithWord(static_cast<std::uint8_t>(axis), pmd::op::kSetAutoStopMode, 1));
+  if (s != Status::kOk) return Failed(axis, "SetAutoStopMode", s);
+  return Status::kOk;
+}
+
+Status BiclopsHead::StopUpdate(int axis) {
+  // The Update consumes the stop: a stop mode of 0 means it was executed.
+  return UpdateOnce(axis, [this, axis](bool* executed) {
+    pmd::Reply reply;
+    const Status s = Query(axis, pmd::op::kGetStopMode, 1, &reply);
+    if (s == Status::kOk) *executed = reply.words[0] == pmd::kNoStop;
+    return s;
+  });
+}
+
+Status BiclopsHead::Stop() {
+  std::lock_guard<std::mutex> lock(mu_);
+  BeginCall();
+  for (int a = 0; a < 3; ++a) {
+    Status s = Command(
+        pmd::WithWord(static_cast<std::uint8_t>(a), pmd::op::kSetStopMode, pmd::kAbruptStop));
+    if (s == Status::kOk) s = StopUpdate(a);
+    // The axis ends wherever it stopped: its active target is read again before the next move.
+    active_target_[Index(a)] = Known{};
+    at_rest_[Index(a)] = false;
+    if (s != Status::kOk) return Fail(s);
+  }
+  return Status::kOk;
+}
+
+Status BiclopsHead::ConfigureAndHome(const StopRequest* stop) {
+  std::lock_guard<std::mutex> lock(mu_);
+  stop_ = stop;
+  struct Forget {
+    const StopRequest** stop;
+    ~Forget() { *stop = nullptr; }
+  } forget_stop{&stop_};
+  BeginCall();
+  last_error_.clear();
+  homed_ = false;
+  Status s = EnsureInitialized();
+  if (s != Status::kOk) {
+    last_error_ = "biclops: initialisation (GetVersion, GetSampleTime, profile): " +
+                  std::string(device::ToString(s));
+    return Fail(s);
+  }
+  // Homing changes the profile registers and the counters: the mirrors are read again after.
+  auto forget = [this]() {
+    initialized_ = false;
+    for (auto& axis : reg_) axis.fill(Known{});
+    active_target_.fill(Known{});
+    at_rest_.fill(false);
+  };
+  forget();
+  for (int a = 0; a < 3; ++a) {
+    s = ConfigureAxis(a);
+    if (s != Status::kOk) return Fail(s);
+  }
+  // Biclops::HomeAxes: tilt, (roll,) verge, then pan.
+  for (int a : {1, 2, 0}) {
+    s = HomeAxis(a);
+    if (s != Status::kOk) return Fail(s);
+  }
+  s = EnsureInitialized();  // the run profile again
+  if (s != Status::kOk) {
+    last_error_ = "biclops: run profile after homing: " + std::string(device::ToString(s));
+    return Fail(s);
+  }
+  homed_ = true;
+  return Status::kOk;
+}
+
 Status BiclopsHead::ResetChip() {
   std::lock_guard<std::mutex> lock(mu_);
   BeginCall();
@@ -552,6 +1005,7 @@ Status BiclopsHead::ResetChip() {
     if (velocity == 0) {
       // Reset: every register is at its power-up value; read them again before use.
       initialized_ = false;
+      homed_ = false;
       for (auto& axis : reg_) axis.fill(Known{});
       active_target_.fill(Known{});
       at_rest_.fill(false);

@@ -9,15 +9,23 @@
 /// took effect; an Update is sent only when the axis' active target changes, and after an
 /// unclear reply the driver waits for the profile to end and reads where it ended
 /// (GetCommandedPosition): at the new target the Update happened, at the old one it did not.
+///
+/// A freshly powered head must be homed (its encoders are relative): ConfigureAndHome configures
+/// the chip as TRACLabs' libPMD does (PMDAxisControl::ConfigureHardware, SetFilter) and finds
+/// each axis' home as its FindHome does with a home sensor and an index pulse per encoder cycle
+/// (PROTOCOL.md, "Homing").
 
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "biclops/pmd_codec.h"
+#include "common/stop_request.h"
 #include "device/head.h"
 #include "serial/byte_link.h"
 
@@ -32,6 +40,44 @@ struct BiclopsAxisOptions {
   double max_rad = 1.0;
   double max_speed_rad_s = 1.0;   ///< > 0: the profile velocity of every move
   double max_accel_rad_s2 = 1.0;  ///< > 0: the profile acceleration
+
+  // Homing (ConfigureAndHome). Defaults per axis: DefaultBiclopsOptions.
+  /// > 0: speed of the homing sweeps (BiclopsDefault.cfg [homing profile] vel).
+  double homing_speed_rad_s = 0.5;
+  /// > 0: acceleration of the homing sweeps (BiclopsDefault.cfg [homing profile] acc).
+  double homing_accel_rad_s2 = 0.5;
+  /// > 0: joint angle between two encoder index pulses, one encoder cycle (BiclopsDefault.cfg:
+  /// 2000 counts per encoder cycle).
+  double index_spacing_rad = 2.0 * 3.14159265358979323846 / 6.0;
+  /// > 0: the home sensor's expected width (BiclopsDefault.cfg homeSensorWidth); two edges
+  /// closer than half of it are not taken for the sensor.
+  double home_sensor_width_rad = 0.026;
+  /// The home sensor's output is low on the sensor (BiclopsDefault.cfg homeSignalPolarity
+  /// ActiveLow): the driver inverts the home input's signal sense so that it reads 1 there.
+  bool home_active_low = true;
+  /// Joint angle of the index pulse nearest the home sensor's centre, i.e. where the joint's 0
+  /// lies relative to it with the opposite sign (BiclopsDefault.cfg homeOffset, 0 counts).
+  double home_offset_rad = 0.0;
+
+  // Servo filter and motor output, sent at configuration (PMD chip units, not SI: the chip
+  // defines them; BiclopsDefault.cfg [run servo filter]).
+  int filter_kp = 100;                  ///< proportional gain, 0..32767
+  int filter_kd = 60;                   ///< derivative gain, 0..32767
+  int filter_ki = 150;                  ///< integral gain, 0..32767
+  int filter_kvff = 0;                  ///< velocity feed-forward, 0..32767
+  int filter_kaff = 0;                  ///< acceleration feed-forward, 0..32767
+  int filter_kout = 65535;              ///< output scale, 0..65535
+  int filter_integration_limit = 2000;  ///< integrator limit, 0..2^31-1
+  int filter_motor_limit = 32767;       ///< motor command limit, 0..32767
+  int filter_motor_bias = 0;            ///< motor command bias, -32768..32767
+  /// >= 0: the following error at which the chip flags a motion error (BiclopsDefault.cfg elim).
+  double position_error_limit_rad = 10.0 * 3.14159265358979323846 / 180.0;
+  /// Motor output mode (SetOutputMode): 1 PWM sign/magnitude (BiclopsDefault.cfg amptype
+  /// PWMSignMag), 2 PWM 50/50, 0 DAC.
+  int output_mode = 1;
+  /// The amplifier's enable input is active low (BiclopsDefault.cfg ampPolarity ActiveLow): the
+  /// driver drives it through the axis-out pin's signal sense, as libPMD's EnableAmp does.
+  bool amp_active_low = true;
 };
 
 struct BiclopsOptions {
@@ -48,8 +94,12 @@ struct BiclopsOptions {
   /// Re-sends of one command known not to have been executed (TRACLabs libPMD tries 4 times;
   /// the read-back lets us try more safely).
   int max_resends = 8;
-  /// Margin on the longest move when waiting for a profile to end (after an unclear Update).
+  /// Margin on the longest move when waiting for a profile to end (after an unclear Update),
+  /// and on each homing sweep's expected duration before it is called a timeout.
   double settle_margin_s = 1.0;
+  /// Whether the composition root homes the head (ConfigureAndHome) when it opens the driver:
+  /// a freshly powered head must be homed; one homed since its power came on need not be.
+  bool home_at_start = true;
 };
 
 /// Biclops defaults: 12000 counts per joint turn (0.03 deg/count; TRACLabs BiclopsDefault.cfg:
@@ -86,11 +136,30 @@ class BiclopsHead final : public device::Head {
   /// Starts every axis towards its target at the axis speed limit (returns once the chip has
   /// the moves; see Read for their progress). kRejected for a target outside the joint range.
   device::Status MoveTo(const device::HeadJoints& target) override;
+  /// Stops every axis where it is: SetStopMode abrupt and an Update per axis (the PMD chip's
+  /// stop; the Update is sent again only when GetStopMode shows the chip did not take it).
+  device::Status Stop() override;
 
   /// Synchronises with the chip, checks its version (three axes at least), reads its cycle
   /// time and sets every axis' profile mode, velocity and acceleration where they differ.
   /// Called by MoveTo when needed.
   device::Status Initialize();
+  /// Configures the chip and homes the three axes, as libBiclops' Initialize and HomeAxes do
+  /// (PROTOCOL.md, "Homing"): per axis the motor output, signal sense, limit switch mode,
+  /// servo filter and profile mode; then tilt, verge and pan in turn find the centre of their
+  /// home sensor (both edges captured), the index pulse nearest it (captured in a sweep of one
+  /// encoder cycle), zero their position there (plus home_offset_rad) and move to 0. Afterwards
+  /// the joint angles read in the frame of device/head.h. Takes seconds (the sweeps run at the
+  /// homing speeds). kRejected when the chip refuses a command or an axis finds no home sensor
+  /// or index; kTimeout, kBadReply, kDisconnected as for every call; last_error() says which
+  /// axis and step failed. Not called by the constructor; may be called again (re-homes).
+  /// `stop` (may be null) is polled while the axes sweep: when requested, homing ends with
+  /// kInterrupted (the axis is left moving; the caller stops the head).
+  device::Status ConfigureAndHome(const StopRequest* stop = nullptr);
+  /// Whether ConfigureAndHome has completed since the driver was made (or the chip reset).
+  bool homed() const;
+  /// What the last failed ConfigureAndHome stopped at ("" after success).
+  std::string last_error() const;
   /// Resets the chip (all registers and position counters to 0: the head loses its homing).
   /// Sent once: the driver confirms it by reading a velocity register back.
   device::Status ResetChip();
@@ -143,6 +212,24 @@ class BiclopsHead final : public device::Head {
   /// After a failure that may leave the chip mid-packet or the mirrors stale.
   device::Status Fail(device::Status s);
   device::Status EnsureInitialized();
+  /// An idempotent command (a configuration Set*): re-sent until the chip answers it OK.
+  device::Status Command(const pmd::Command& command);
+  device::Status ConfigureAxis(int axis);
+  /// Sends one Update to `axis`; after an unclear reply `took` says whether the chip executed
+  /// it (then it is not sent again), else it is re-sent (at most max_resends times).
+  device::Status UpdateOnce(int axis, const std::function<device::Status(bool*)>& took);
+  /// An Update during homing: re-sent only when the chip shows it did not take it.
+  device::Status HomingUpdate(int axis, std::int32_t target);
+  /// One homing sweep to `target` counts; with `capture` (kCaptureIndex or kCaptureHome, or -1
+  /// for none) it stops smoothly at the first capture: *captured and *capture_counts.
+  device::Status HomingMove(int axis, std::int32_t target, int capture, bool* captured,
+                            std::int32_t* capture_counts);
+  device::Status HomeAxis(int axis);
+  /// Shifts the axis' position counter by `delta` counts (AdjustActualPosition), never twice.
+  device::Status AdjustPosition(int axis, std::int32_t delta);
+  /// The Update that executes a pending stop, never twice (a second would restart the profile).
+  device::Status StopUpdate(int axis);
+  device::Status Failed(int axis, const std::string& step, device::Status s);
 
   std::unique_ptr<ByteLink> link_;
   BiclopsOptions options_;
@@ -162,6 +249,9 @@ class BiclopsHead final : public device::Head {
   double longest_move_s_ = 0.0;
   double rtt_s_ = 0.0;  ///< mean time from a packet to its complete reply
   BiclopsCounters counters_;
+  bool homed_ = false;
+  const StopRequest* stop_ = nullptr;  ///< during ConfigureAndHome
+  std::string last_error_;
 };
 
 }  // namespace hgrasp::drivers

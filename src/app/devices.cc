@@ -2,9 +2,11 @@
 
 #include <spdlog/spdlog.h>
 
+#include "app/output_dir.h"
 #include "biclops/biclops_head.h"
 #include "camera/gst_stereo_camera.h"
 #include "common/error.h"
+#include "common/write_file.h"
 #include "config/device_config.h"
 #include "laser_board/board_devices.h"
 #include "laser_board/laser_board.h"
@@ -50,11 +52,56 @@ SafeStopReport Robot::LeaveSafe() {
   return report;
 }
 
-Robot OpenRobot(const sim::Scenario& scenario) {
+std::string StartFailure::failure() const {
+  return status == device::Status::kInterrupted ? "interrupted" : "device_error";
+}
+
+nlohmann::json StartFailure::Report(const sim::Scenario& scenario,
+                                    const SafeStopReport& safe) const {
+  return {{"scenario", scenario.name},
+          {"seed", scenario.seed},
+          {"ok", false},
+          {"failure", failure()},
+          {"failure_detail", detail},
+          {"failed_device", status == device::Status::kInterrupted ? nlohmann::json(nullptr)
+                                                                   : nlohmann::json(device)},
+          {"safe_stop", safe.Json()}};
+}
+
+bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
+                  std::string_view command) {
+  if (!robot.start_failure) return false;
+  const SafeStopReport safe = robot.LeaveSafe();
+  const StartFailure& f = *robot.start_failure;
+  if (out != nullptr) {
+    WriteFileWhole(out->Path("report.json"), f.Report(scenario, safe).dump(2) + "\n");
+    out->Commit();
+  }
+  spdlog::error("{}: {}: {}{}", command, f.failure(), f.detail,
+                out != nullptr ? "; wrote " + out->dir() : std::string("; nothing written"));
+  return true;
+}
+
+Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop) {
   Robot robot;
   robot.all_simulated = scenario.devices.AllSimulated();
   if (scenario.devices.AnySimulated()) robot.twin = std::make_unique<sim::SimRobot>(scenario);
   robot.devices = MakeDevices(scenario, robot.twin.get());
+  // A freshly powered Biclops does not know where its axes are (relative encoders).
+  const auto* head_config = scenario.devices.Backend<cfg::BiclopsBackend>("head");
+  if (head_config != nullptr && head_config->options.home_at_start) {
+    auto& head = dynamic_cast<drivers::BiclopsHead&>(*robot.devices.head);
+    spdlog::info("head: homing the Biclops (configure, then tilt, verge, pan)");
+    const device::Status s = head.ConfigureAndHome(stop);
+    if (s != device::Status::kOk) {
+      robot.start_failure =
+          StartFailure{"head", s,
+                       s == device::Status::kInterrupted
+                           ? (stop != nullptr ? stop->Reason() : "stop") + " during the homing"
+                           : "head: " + std::string(device::ToString(s)) + " while homing (" +
+                                 head.last_error() + ")"};
+    }
+  }
   return robot;
 }
 

@@ -7,6 +7,8 @@
 /// the emulators and the robot.
 
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "app/safe_stop.h"
@@ -15,6 +17,19 @@
 #include "sim/sim_devices.h"
 
 namespace hgrasp::app {
+
+/// A device that failed while the robot was being started (the head's homing).
+struct StartFailure {
+  std::string device;  ///< a devices key
+  device::Status status = device::Status::kOk;
+  std::string detail;  ///< what the driver said
+
+  /// "device_error", or "interrupted" when a stop signal ended the start.
+  std::string failure() const;
+  /// {"scenario", "seed", "ok": false, "failure", "failure_detail", "failed_device",
+  ///  "safe_stop"}: the report of a command that ended before it began.
+  nlohmann::json Report(const sim::Scenario& scenario, const SafeStopReport& safe) const;
+};
 
 /// The robot a command works with. It is left safe (LeaveSafe) when the command is done; if
 /// the command never gets there (an exception), its destructor does it.
@@ -37,14 +52,26 @@ struct Robot {
   /// app::LeaveSafe on the devices (safe_stop.h); logs what did not take it.
   SafeStopReport LeaveSafe();
 
+  /// Set when a device failed as the robot was started: the command reports it and ends.
+  std::optional<StartFailure> start_failure;
+
  private:
   bool left_safe_ = false;
 };
 
-/// The devices of `scenario`, opened: the twin built only when some device is simulated.
-/// Throws hgrasp::InputError naming the field (devices.KEY.port, ...) and the system's reason
-/// when a port or pipeline cannot be opened.
-Robot OpenRobot(const sim::Scenario& scenario);
+class OutputDir;
+
+/// When the robot failed to start: leaves it safe, writes the start failure's report into `out`
+/// (null: no report, as `calibrate laser` has none), logs it for `command` and returns true.
+bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
+                  std::string_view command);
+
+/// The devices of `scenario`, opened and started: the twin built only when some device is
+/// simulated; a real Biclops head homed (ConfigureAndHome) unless its options say not to, with
+/// `stop` polled meanwhile (a failure is Robot::start_failure). Throws hgrasp::InputError
+/// naming the field (devices.KEY.port, ...) and the system's reason when a port or pipeline
+/// cannot be opened.
+Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop = nullptr);
 
 /// The devices for `scenario`: the simulated ones from `twin` (null only when no device is
 /// simulated), the others opened on their ports. Throws as OpenRobot.

@@ -232,7 +232,8 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   OutputDir out(o.out_dir);
   const StopSignals signals;
   config.stop = signals.request();
-  Robot robot = OpenRobot(scenario);
+  Robot robot = OpenRobot(scenario, signals.request());
+  if (EndedAtStart(robot, scenario, &out, plan ? "plan" : "model")) return 1;
   device::RobotDevices& dev = robot.devices;
   task::GraspTask task(&dev, robot_model, config);
   const bool ok = task.Look() && (!plan || task.Plan());

@@ -72,7 +72,8 @@ int Run(const RunOptions& o) {
   OutputDir out_dir(o.out_dir);
   const StopSignals signals;
   config.stop = signals.request();
-  Robot robot = OpenRobot(scenario);
+  Robot robot = OpenRobot(scenario, signals.request());
+  if (EndedAtStart(robot, scenario, &out_dir, "run")) return 1;
   device::RobotDevices& dev = robot.devices;
   sim::SimRobot* const truth = robot.truth();  // null unless every device is simulated
   const bool sim_truth = truth != nullptr;

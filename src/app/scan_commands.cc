@@ -61,7 +61,8 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   }
   const auto head = Head();
   const StopSignals signals;
-  Robot robot = OpenRobot(scenario);
+  Robot robot = OpenRobot(scenario, signals.request());
+  if (EndedAtStart(robot, scenario, nullptr, "calibrate laser")) return 1;
   device::RobotDevices& dev = robot.devices;
   scan::LaserCalibrationReport report;
   scan::SweepConfig sweep;
@@ -118,7 +119,8 @@ int Scan(const ScanOptions& o) {
   const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
   OutputDir out(o.out_dir);
   const StopSignals signals;
-  Robot robot = OpenRobot(scenario);
+  Robot robot = OpenRobot(scenario, signals.request());
+  if (EndedAtStart(robot, scenario, &out, "scan")) return 1;
   device::RobotDevices& dev = robot.devices;
   scan::StripeFrameConfig config;
   config.stereo = !o.single_camera;
@@ -153,11 +155,19 @@ int Scan(const ScanOptions& o) {
     return 1;
   }
 
+  // A sweep in which no frame showed the stripe is a failed scan: the laser is off or out of
+  // view, or the cameras see something else.
+  const bool seen = result.points > 0;
   nlohmann::json report;
   report["scenario"] = scenario.name;
   report["seed"] = scenario.seed;
-  report["ok"] = true;
-  report["failure"] = nullptr;
+  report["ok"] = seen;
+  report["failure"] = seen ? nlohmann::json(nullptr) : nlohmann::json("no_stripe");
+  if (!seen) {
+    report["failure_detail"] = "no stripe point in any of the " +
+                               std::to_string(result.range.cols()) +
+                               " frames of the sweep (is the laser on, and in the cameras' view?)";
+  }
   report["range"] = {{"points", result.points}, {"rejected", result.rejected}};
   report["timing_s"] = {{"scan", scan_s}, {"total", Seconds(t0)}};
   report["safe_stop"] = safe.Json();
@@ -202,6 +212,10 @@ int Scan(const ScanOptions& o) {
   out.Commit();
   spdlog::info("scan: {} points, {} rejected rows{}; scan {:.2f} s, total {:.2f} s; wrote {}",
                result.points, result.rejected, truth_line, scan_s, Seconds(t0), o.out_dir);
+  if (!seen) {
+    spdlog::error("scan: no_stripe: {}", report["failure_detail"].get<std::string>());
+    return 1;
+  }
   return 0;
 }
 

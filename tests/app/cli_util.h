@@ -16,11 +16,13 @@ struct CliResult {
 
 /// Runs `hgrasp ARGS` (the built binary) and returns its exit status and output. With
 /// `limit_s` > 0 the command is killed after that long (status 124), so a hang fails the test
-/// instead of stopping the suite.
-inline CliResult RunHgrasp(const std::string& args, int limit_s = 0) {
+/// instead of stopping the suite. `env`: "NAME=value ..." set for the command only.
+inline CliResult RunHgrasp(const std::string& args, int limit_s = 0, const std::string& env = "") {
   CliResult r;
   const std::string limit = limit_s > 0 ? "timeout " + std::to_string(limit_s) + " " : "";
-  const std::string cmd = limit + std::string(HGRASP_BINARY) + " " + args + " 2>&1";
+  const std::string cmd =
+      (env.empty() ? "" : "env " + env + " ") + limit + std::string(HGRASP_BINARY) + " " + args +
+      " 2>&1";
   FILE* pipe = popen(cmd.c_str(), "r");
   if (pipe == nullptr) return r;
   std::array<char, 4096> buf;

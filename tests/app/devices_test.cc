@@ -39,6 +39,16 @@ bool WaitFor(const std::function<bool()>& done, double timeout_s) {
   return done();
 }
 
+// Homing sweeps faster than BiclopsDefault.cfg's (pan 50 deg/s at 10 deg/s^2), as a test can
+// afford: the options reach the driver through the scenario.
+constexpr const char* kFastHoming = "{homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}";
+
+double TrueCounts(drivers::EmulatorHost& host, int axis) {
+  return host.With([axis](drivers::DeviceEmulator& d) {
+    return dynamic_cast<drivers::BiclopsEmulator&>(d).chip().position_counts(axis);
+  });
+}
+
 TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
   const fs::path dir = fs::temp_directory_path() / "hgrasp_devices_test";
   fs::create_directories(dir);
@@ -54,7 +64,9 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
                       << "}\n"
                          "  head: {driver: biclops, port: "
                       << head.port()
-                      << "}\n"
+                      << ", options: {pan: " << kFastHoming << ", tilt: " << kFastHoming
+                      << ", verge: " << kFastHoming
+                      << "}}\n"
                          "  hand_right: {driver: sensorhand, port: "
                       << hand.port()
                       << "}\n"
@@ -70,6 +82,13 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
   EXPECT_EQ(robot.truth(), nullptr);  // not every device is the twin's
   ASSERT_NE(robot.twin, nullptr);     // but some are
   device::RobotDevices& dev = robot.devices;
+
+  // The head powered up away from its home (relative encoders): the composition root homed it.
+  auto* biclops = dynamic_cast<drivers::BiclopsHead*>(dev.head.get());
+  ASSERT_NE(biclops, nullptr);
+  EXPECT_TRUE(biclops->homed());
+  EXPECT_FALSE(robot.start_failure.has_value());
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(TrueCounts(head, a), 0.0, 1.0) << "axis " << a;
 
   // Which backend each device got.
   EXPECT_NE(dynamic_cast<drivers::Val2Arm*>(dev.arm[0].get()), nullptr);
@@ -89,6 +108,8 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
   EXPECT_NEAR(hs.q.pan, target.pan, 1e-3);
   EXPECT_NEAR(hs.q.tilt, target.tilt, 1e-3);
   EXPECT_NEAR(hs.q.verge, target.verge, 1e-3);
+  const std::array<std::int32_t, 3> counts = biclops->ToCounts(target);  // in the true frame
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(TrueCounts(head, a), counts[a], 1.0) << "axis " << a;
 
   ASSERT_EQ(dev.laser->SetLaser(true), Status::kOk);
   ASSERT_EQ(dev.laser->MoveTo(300, 6000.0), Status::kOk);

@@ -40,7 +40,14 @@ void CheckPacket(const pmd::CommandDecoder::Packet& p) {
   const std::vector<std::uint8_t> raw(p.raw.begin(), p.raw.begin() + p.size);
   const pmd::OpcodeInfo* info = pmd::FindOpcode(raw[3]);
   Check((info != nullptr) == p.known_opcode);
-  Check(p.size == 4 + 2 * static_cast<std::size_t>(info ? info->argument_words : 0));
+  if (info != nullptr) {
+    Check(p.size == 4 + 2 * static_cast<std::size_t>(info->argument_words));
+  } else {
+    // An unknown opcode ends at the first whole word with a zero sum, or at the longest packet.
+    Check((p.size - 4) % 2 == 0 || p.size == pmd::kMaxCommandBytes);
+    for (std::size_t n = 4; n < p.size; n += 2) Check(!pmd::SumIsZero({raw.data(), n}));
+    Check(p.checksum_ok || p.size == pmd::kMaxCommandBytes);
+  }
   Check(pmd::SumIsZero(raw) == p.checksum_ok);
   std::vector<std::uint8_t> again = pmd::Encode(p.command);
   Check(again.size() == raw.size());

@@ -422,5 +422,25 @@ TEST(BiclopsHead, VanishedPortIsReportedAndTheDriverReconnects) {
   EXPECT_GE(head.counters().disconnects, 1u);
 }
 
+TEST(BiclopsHead, StopHaltsEveryAxisWhereItIsAndTheNextMoveGoesOn) {
+  EmulatorHost host(std::make_unique<BiclopsEmulator>());
+  BiclopsHead head(OpenPort(host.port()));
+  ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  ASSERT_EQ(head.Stop(), Status::kOk);
+  device::HeadState s = WaitStill(head, 2.0);
+  EXPECT_FALSE(s.moving);
+  EXPECT_GT(s.q.pan, 0.1);
+  EXPECT_LT(s.q.pan, 2.9);  // stopped on the way (3 rad takes 1.6 s)
+  // The same target again: the chip still has it buffered, one Update sends the head on.
+  const std::size_t before = Log(host).size();
+  ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
+  const std::vector<PmdExecuted> log = Log(host);
+  ASSERT_EQ(log.size(), before + 1);
+  EXPECT_EQ(log.back(), (PmdExecuted{0, 0, op::kUpdate, 0}));
+  s = WaitStill(head);
+  EXPECT_NEAR(s.q.pan, 3.0, kCount);
+}
+
 }  // namespace
 }  // namespace hgrasp::drivers

@@ -90,6 +90,34 @@ TEST(BiclopsPmdCodec, OpcodeTableMatchesLibPmd) {
   }
   EXPECT_EQ(FindOpcode(0x01), nullptr);
   EXPECT_EQ(FindOpcode(0xFF), nullptr);
+  // What libBiclops sends during configuration, homing and moves (libPMD PMD.cpp's transport
+  // calls): words out and back.
+  const Row vendor[] = {
+      {0x31, 0, 1, false}, {0x34, 1, 0, true},  {0x36, 0, 2, true}, {0x4D, 2, 0, true},
+      {0x5B, 1, 0, true},  {0x80, 1, 0, true},  {0x82, 2, 0, true}, {0x83, 1, 1, false},
+      {0x87, 1, 0, true},  {0x95, 2, 0, true},  {0x97, 2, 0, true}, {0xA2, 1, 0, true},
+      {0xA3, 0, 1, false}, {0xA4, 0, 1, false}, {0xC0, 3, 0, true}, {0xC8, 3, 0, true},
+      {0xC9, 1, 2, true},  {0xD2, 1, 0, true},  {0xD4, 2, 0, true}, {0xD6, 3, 0, true},
+      {0xD8, 1, 0, true},  {0xD9, 0, 1, false}, {0xDC, 1, 0, true}, {0xDD, 0, 1, false},
+      {0xE0, 1, 0, true},  {0xED, 1, 0, true},  {0xF5, 2, 0, true}, {0x25, 1, 0, true},
+      {0x9E, 1, 0, true},  {0x49, 0, 2, false}};
+  for (const Row& r : vendor) {
+    const OpcodeInfo* info = FindOpcode(r.opcode);
+    ASSERT_NE(info, nullptr) << int(r.opcode);
+    EXPECT_EQ(info->argument_words, r.args) << info->name;
+    EXPECT_EQ(info->result_words, r.results) << info->name;
+    EXPECT_EQ(info->changes_state, r.changes) << info->name;
+  }
+  // The table is in opcode order, without repeats, within the packet limits.
+  const std::span<const OpcodeInfo> all = AllOpcodes();
+  EXPECT_GT(all.size(), 150u);
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (i > 0) {
+      EXPECT_LT(all[i - 1].opcode, all[i].opcode);
+    }
+    EXPECT_LE(all[i].argument_words, static_cast<int>(kMaxArgumentWords)) << all[i].name;
+    EXPECT_LE(all[i].result_words, 2) << all[i].name;
+  }
   EXPECT_TRUE(StatusNeedsResync(status::kBadSerialChecksum));
   EXPECT_TRUE(StatusNeedsResync(status::kInvalidInstruction));
   EXPECT_TRUE(StatusNeedsResync(status::kInvalidAxis));
@@ -211,9 +239,50 @@ TEST(BiclopsPmdCodec, ReplyDecoderFlagsEveryCorruptedByte) {
   }
 }
 
+TEST(BiclopsPmdCodec, UnknownOpcodesAreFramedByTheirChecksum) {
+  // Issue 16: an opcode the decoder did not know was framed as its 4 header bytes, so its
+  // argument words started the next packet, and the valid commands after it were answered with
+  // checksum errors. Now a byte that is no opcode ends its packet at the first whole word with
+  // a zero sum, whatever it carries, and the next packet decodes exactly.
+  CommandDecoder decoder;
+  for (int words = 0; words <= static_cast<int>(kMaxArgumentWords); ++words) {
+    SCOPED_TRACE(words);
+    Command unknown;
+    unknown.opcode = 0x01;  // no opcode of PMDOPCodes.h
+    unknown.axis = 1;
+    unknown.word_count = words;
+    for (int i = 0; i < words; ++i)
+      unknown.words[i] = static_cast<std::uint16_t>(0x1234 + 0x1111 * i);
+    Bytes stream = Encode(unknown);
+    for (const Command& c : {SetPosition(0, 1000), Simple(2, op::kGetActualPosition)}) {
+      const Bytes b = Encode(c);
+      stream.insert(stream.end(), b.begin(), b.end());
+    }
+    std::vector<CommandDecoder::Packet> packets;
+    decoder.Feed(stream, &packets);
+    ASSERT_EQ(packets.size(), 3u);
+    EXPECT_FALSE(packets[0].known_opcode);
+    EXPECT_TRUE(packets[0].checksum_ok);
+    EXPECT_EQ(packets[0].size, 4u + 2u * static_cast<std::size_t>(words));
+    EXPECT_EQ(packets[1].command, SetPosition(0, 1000));
+    EXPECT_TRUE(packets[1].checksum_ok);
+    EXPECT_EQ(packets[2].command, Simple(2, op::kGetActualPosition));
+    EXPECT_EQ(decoder.pending(), 0u);
+  }
+  // A known opcode with arguments: its length comes from the table (SetBreakpointValue: 3).
+  const std::uint16_t w[] = {0, 8, 8};
+  const Bytes bp = Encode(WithWords(0, op::kSetBreakpointValue, w));
+  EXPECT_EQ(bp.size(), 10u);
+  std::vector<CommandDecoder::Packet> packets;
+  decoder.Feed(bp, &packets);
+  ASSERT_EQ(packets.size(), 1u);
+  EXPECT_TRUE(packets[0].known_opcode);
+  EXPECT_EQ(CommandValue(packets[0].command), 0x00080008);
+}
+
 TEST(BiclopsPmdCodec, ZerosResynchroniseTheChipFromAnyPartialPacket) {
-  // Whatever partial packet the chip holds, at most 4 single 0x00 bytes complete it; after the
-  // first answer the next packet decodes exactly.
+  // Whatever partial packet the chip holds, at most one longest packet's length of single 0x00
+  // bytes completes it; after the first answer the next packet decodes exactly.
   std::mt19937 rng(14);
   for (int i = 0; i < 5000; ++i) {
     CommandDecoder decoder;
@@ -222,7 +291,7 @@ TEST(BiclopsPmdCodec, ZerosResynchroniseTheChipFromAnyPartialPacket) {
     for (int k = 0; k < garbage; ++k) decoder.Push(static_cast<std::uint8_t>(rng()), &p);
     int zeros = 0;
     while (!decoder.Push(0x00, &p)) ++zeros;
-    ASSERT_LE(zeros + 1, 4);
+    ASSERT_LE(zeros + 1, static_cast<int>(kMaxCommandBytes));
     EXPECT_EQ(decoder.pending(), 0u);
     const Command c = RandomCommand(rng);
     const Bytes bytes = Encode(c);

@@ -1,0 +1,109 @@
+// The robot's PC (issue 16, item 1): when every device of the scenario is a real driver,
+// `hgrasp scan` and `hgrasp run` build no MuJoCo world and no EGL context. Proved by running them
+// where neither can exist: EGL finds no vendor library (__EGL_VENDOR_LIBRARY_FILENAMES names none)
+// and the data root has no models/humanoid.xml (the world's MJCF), only what the pipeline reads
+// (the URDF and the calibration files). The same root and environment make `hgrasp render`, which
+// needs both, fail: the test would notice if they did not bite.
+//
+// The devices are the emulators on ptys and two videotestsrc cameras: the cameras never see a
+// stripe, so the scan ends as no_stripe and the run as no_target, each exit 1, with the robot left
+// safe.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_util.h"
+#include "emulators/biclops_emulator.h"
+#include "emulators/emulator.h"
+#include "emulators/laser_board_emulator.h"
+#include "emulators/sensorhand_emulator.h"
+#include "emulators/val2_emulator.h"
+
+namespace hgrasp {
+namespace {
+
+namespace fs = std::filesystem;
+using device::Side;
+
+std::string ReadFile(const fs::path& p) {
+  std::ifstream f(p);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+// Homing sweeps faster than BiclopsDefault.cfg's, as a test can afford.
+constexpr const char* kFastHoming = "{homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}";
+
+TEST(CliRealRobot, EveryDeviceRealBuildsNoWorldAndNoEglContext) {
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_real_robot";
+  fs::remove_all(dir);
+  // A data root without the simulation's model.
+  const fs::path root = dir / "root";
+  fs::create_directories(root / "models");
+  fs::copy(fs::path(HGRASP_ROOT_DIR) / "models/humanoid.urdf", root / "models/humanoid.urdf");
+  fs::copy(fs::path(HGRASP_ROOT_DIR) / "calibration", root / "calibration",
+           fs::copy_options::recursive);
+  ASSERT_FALSE(fs::exists(root / "models/humanoid.xml"));
+
+  drivers::EmulatorHost arm_left(drivers::MakeVal2Emulator(Side::kLeft));
+  drivers::EmulatorHost arm_right(drivers::MakeVal2Emulator(Side::kRight));
+  drivers::EmulatorHost hand_left(drivers::MakeSensorHandEmulator());
+  drivers::EmulatorHost hand_right(drivers::MakeSensorHandEmulator());
+  drivers::EmulatorHost head(drivers::MakeBiclopsEmulator());
+  drivers::EmulatorHost board(drivers::MakeLaserBoardEmulator());
+  const std::string camera =
+      "'videotestsrc is-live=true pattern=ball ! "
+      "video/x-raw,format=BGR,width=320,height=240,framerate=25/1 ! appsink'";
+  const fs::path scenario = dir / "real_robot.yaml";
+  std::ofstream(scenario) << "name: real_robot\n"
+                             "task:\n  target: {color: yellow}\n"
+                             "devices:\n"
+                             "  arm_left: {driver: val2, port: " << arm_left.port() << "}\n"
+                          << "  arm_right: {driver: val2, port: " << arm_right.port() << "}\n"
+                          << "  hand_left: {driver: sensorhand, port: " << hand_left.port() << "}\n"
+                          << "  hand_right: {driver: sensorhand, port: " << hand_right.port()
+                          << "}\n"
+                          << "  head: {driver: biclops, port: " << head.port()
+                          << ", options: {pan: " << kFastHoming << ", tilt: " << kFastHoming
+                          << ", verge: " << kFastHoming << "}}\n"
+                          << "  laser: {driver: laser_board, port: " << board.port() << "}\n"
+                          << "  leds: {driver: laser_board, port: " << board.port() << "}\n"
+                          << "  cameras: {driver: gstreamer, left: " << camera
+                          << ", right: " << camera << "}\n";
+  const std::string env =
+      "HGRASP_ROOT=" + root.string() + " __EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json ";
+
+  // The control: what needs the world and EGL cannot run here.
+  const auto render = testing::RunHgrasp(
+      "render " + scenario.string() + " --out " + (dir / "render").string(), 60, env);
+  EXPECT_NE(render.status, 0) << render.output;
+
+  struct Case {
+    const char* command;
+    const char* failure;
+  };
+  for (const Case& c : {Case{"scan", "no_stripe"}, Case{"run", "no_target"}}) {
+    const fs::path out = dir / c.command;
+    const auto r = testing::RunHgrasp(
+        std::string(c.command) + " " + scenario.string() + " --out " + out.string(), 120, env);
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_EQ(r.output.find("EGL"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("humanoid.xml"), std::string::npos) << r.output;
+    const nlohmann::json report = nlohmann::json::parse(ReadFile(out / "report.json"));
+    EXPECT_EQ(report["failure"], c.failure) << report.dump(2);
+    EXPECT_FALSE(report.contains("truth"));
+    for (const char* device : {"arm_left", "arm_right", "head"}) {
+      EXPECT_EQ(report["safe_stop"][device]["stop"], "ok") << device;
+    }
+    EXPECT_EQ(report["safe_stop"]["laser"]["laser off"], "ok");
+    EXPECT_EQ(report["safe_stop"]["leds"]["right off"], "ok");
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace hgrasp
