@@ -19,6 +19,11 @@ void FaultyLink::Cut(bool cut) {
   cut_ = cut;
 }
 
+void FaultyLink::CutFromDevice(bool cut) {
+  std::lock_guard<std::mutex> lock(mu_);
+  cut_from_device_ = cut;
+}
+
 FaultCounts FaultyLink::counts() const {
   std::lock_guard<std::mutex> lock(mu_);
   return counts_;
@@ -37,11 +42,12 @@ bool FaultyLink::InDropout(Clock::time_point now) {
   return now < dropout_end_;
 }
 
-void FaultyLink::Damage(std::span<const std::uint8_t> in, std::vector<std::uint8_t>* out) {
+void FaultyLink::Damage(std::span<const std::uint8_t> in, bool from_device,
+                        std::vector<std::uint8_t>* out) {
   std::lock_guard<std::mutex> lock(mu_);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::uniform_int_distribution<int> other(1, 255), any(0, 255);
-  const bool lost = cut_ || InDropout(Clock::now());
+  const bool lost = cut_ || (from_device && cut_from_device_) || InDropout(Clock::now());
   for (std::uint8_t b : in) {
     ++counts_.bytes;
     if (lost) {
@@ -63,7 +69,7 @@ void FaultyLink::Damage(std::span<const std::uint8_t> in, std::vector<std::uint8
 device::Status FaultyLink::Write(std::span<const std::uint8_t> bytes) {
   std::vector<std::uint8_t> out;
   out.reserve(bytes.size() + 4);
-  Damage(bytes, &out);
+  Damage(bytes, /*from_device=*/false, &out);
   if (out.empty()) return device::Status::kOk;  // lost on the wire: the sender cannot tell
   return inner_->Write(out);
 }
@@ -81,7 +87,7 @@ device::Status FaultyLink::Read(std::span<std::uint8_t> buf, double timeout_s, s
     const device::Status s = inner_->Read(raw, std::max(left, 0.0), &got);
     if (s != device::Status::kOk) return s;
     std::vector<std::uint8_t> out;
-    Damage(std::span<const std::uint8_t>(raw.data(), got), &out);
+    Damage(std::span<const std::uint8_t>(raw.data(), got), /*from_device=*/true, &out);
     if (!out.empty()) {
       // Inserted bytes beyond the caller's buffer are dropped too (an overrun).
       *n = std::min(out.size(), buf.size());

@@ -40,12 +40,15 @@ class FaultyLink final : public ByteLink {
 
   /// Cuts the cable (every byte lost from now on) or mends it.
   void Cut(bool cut);
+  /// Cuts only the device's transmit wire (what the device sends is lost, what the host sends
+  /// still arrives: a broken receive line at the host) or mends it.
+  void CutFromDevice(bool cut);
   FaultCounts counts() const;
 
  private:
   using Clock = std::chrono::steady_clock;
   /// Passes `in` through the faults into *out.
-  void Damage(std::span<const std::uint8_t> in, std::vector<std::uint8_t>* out);
+  void Damage(std::span<const std::uint8_t> in, bool from_device, std::vector<std::uint8_t>* out);
   bool InDropout(Clock::time_point now);
 
   std::unique_ptr<ByteLink> inner_;
@@ -53,6 +56,7 @@ class FaultyLink final : public ByteLink {
   mutable std::mutex mu_;
   std::mt19937_64 rng_;
   bool cut_ = false;
+  bool cut_from_device_ = false;
   Clock::time_point next_dropout_, dropout_end_;
   FaultCounts counts_;
 };

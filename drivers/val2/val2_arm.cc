@@ -221,6 +221,18 @@ Status Val2Arm::SetSpeed(double fraction) {
 
 Status Val2Arm::Stop() { return Command(val2::Encode(val2::AbortCommand()), true, true); }
 
+Status Val2Arm::SafeStop() {
+  if (silent_since_) {
+    // ^U empties the console's line of whatever a lost exchange left on it.
+    const std::string blind = "\x15" + val2::Encode(val2::AbortCommand()) + "\r";
+    const Status s = link_->Write(std::span<const std::uint8_t>(
+        reinterpret_cast<const std::uint8_t*>(blind.data()), blind.size()));
+    if (s == Status::kOk) ++counters_.blind_aborts;
+    known_ = false;  // what the line holds now is unknown: the next exchange finds out
+  }
+  return Stop();
+}
+
 Status Val2Arm::Ready() { return Command(val2::Encode(val2::ReadyCommand()), false, true); }
 
 // ---------------------------------------------------------------------------------------------

@@ -75,6 +75,7 @@ struct Val2Counters {
   long resolved_retries = 0;   ///< failed calls completed by their retry without re-sending
   long cancelled_pending = 0;  ///< unexecuted commands of failed calls cancelled
   long safety_aborts = 0;      ///< ABORTs sent after a lost link
+  long blind_aborts = 0;       ///< ABORTs typed blind by SafeStop to a silent controller
   long bad_where = 0;          ///< WHERE reports that failed the strict parse
 };
 
@@ -97,6 +98,11 @@ class Val2Arm final : public device::Arm {
   device::Status SetSpeed(double fraction) override;
   /// ABORT.
   device::Status Stop() override;
+  /// When the controller has gone silent (no answer since the last call's first wait), first
+  /// types ^U ABORT CR blind, without waiting for echoes: a controller that still hears the
+  /// host (a broken receive wire, a dropout on the way back) stops the arm at once. Then Stop()
+  /// as always, which confirms the stop or reports why it could not.
+  device::Status SafeStop() override;
   /// DO READY: the arm's READY position (VAL's rest position, joints 0, -90, 90, 0, 0, 0 deg).
   device::Status Ready();
 

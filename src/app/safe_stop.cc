@@ -49,7 +49,9 @@ SafeStopReport LeaveSafe(device::RobotDevices& dev) {
   // The arms first: they carry the most energy.
   for (Side side : {Side::kLeft, Side::kRight}) {
     const std::string key = "arm_" + std::string(device::ToString(side));
-    if (device::Arm* arm = dev.arm[static_cast<int>(side)].get()) add(key, "stop", arm->Stop());
+    if (device::Arm* arm = dev.arm[static_cast<int>(side)].get()) {
+      add(key, "stop", arm->SafeStop());
+    }
   }
   if (dev.laser) {
     add("laser", "laser off", dev.laser->SetLaser(false));

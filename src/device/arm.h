@@ -38,6 +38,9 @@ class Arm {
 
   /// Stop where the arm is now.
   virtual Status Stop() = 0;
+  /// The safe stop (DESIGN.md rule 8): Stop, and more where the driver can do more for a
+  /// controller it cannot hear (Val2Arm types the stop blind first). Never moves the arm.
+  virtual Status SafeStop() { return Stop(); }
 };
 
 }  // namespace hgrasp::device
