@@ -57,15 +57,18 @@ void KinematicSensorHand::Advance(double dt_s) {
       // The motor's torque-speed line: slower the harder it presses, stalled at the stall force.
       v *= stall_force_n_ > 0.0 ? std::max(0.0, 1.0 - force / stall_force_n_) : 0.0;
     }
+    const double y_before = axis_.position();
     axis_.MoveAt(v, m_.accel_m_s2);
     axis_.Advance(h);
     if (m_.object_width_m > 0.0 && m_.object_stiffness_n_m > 0.0) {
       // Running on into the object after a stop or at a stall never presses harder than the
-      // motor can: the gear stops at the stall force.
+      // motor can: the gear stops at the stall force. It never moves the fingers back out: a
+      // weaker close speed on a stronger grip stalls at once and holds (the gear does not
+      // back-drive; it once sprang back to the weaker stall force's opening).
       const double y_min =
           m_.object_width_m - std::max(stall_force_n_, 0.0) / m_.object_stiffness_n_m;
       if (axis_.position() < y_min && axis_.velocity() <= 0.0) {
-        axis_ = TrapezoidAxis(Limits(m_), y_min);
+        axis_ = TrapezoidAxis(Limits(m_), std::max(axis_.position(), std::min(y_before, y_min)));
       }
     }
   }
@@ -96,6 +99,9 @@ void SensorHandEmulator::StepModel(double t_s) {
     model_->Advance(t_s - model_t_);
     model_t_ = t_s;
   }
+  const bool still = std::abs(model_->velocity_m_s()) < kStillM_s;
+  if (still && !still_) still_since_t_ = t_s;
+  still_ = still;
 }
 
 void SensorHandEmulator::Advance(double t_s, std::vector<std::uint8_t>* out) {
@@ -105,7 +111,6 @@ void SensorHandEmulator::Advance(double t_s, std::vector<std::uint8_t>* out) {
   // frames it missed (a real hand's timer would have sent them; a late host cannot).
   const auto frame = sensorhand::EncodeDump(Sample());
   out->insert(out->end(), frame.begin(), frame.end());
-  ++seq_;
   ++samples_sent_;
   next_sample_t_ += sensorhand::kDumpPeriodS;
   if (next_sample_t_ <= t_s) next_sample_t_ = t_s + sensorhand::kDumpPeriodS;
@@ -128,6 +133,7 @@ void SensorHandEmulator::Execute(const Command& c, double t_s, std::vector<std::
     case Command::Kind::kSpeed: {
       speed_ = c.speed;
       ++counter_;
+      still_since_t_ = t_s;  // the stall detector's window starts again
       const double open = sensorhand::SpeedFraction(c.speed.open);
       const double close = sensorhand::SpeedFraction(c.speed.close);
       model_->Drive(scale_.full_speed_m_s * (open - close),
@@ -152,7 +158,6 @@ void SensorHandEmulator::PowerCycle() {
   streaming_ = false;
   speed_ = sensorhand::kStop;
   counter_ = 0;
-  seq_ = 0;
   decoder_.Reset();
   model_->Drive(0.0, 0.0);
 }
@@ -166,10 +171,13 @@ sensorhand::DumpSample SensorHandEmulator::Sample() const {
     state = std::abs(v) < kStillM_s ? MotionState::kIdle
             : v > 0.0               ? MotionState::kOpening
                                     : MotionState::kClosing;
+  } else if (std::abs(v) >= kStillM_s) {
+    state = v > 0.0 ? MotionState::kOpening : MotionState::kClosing;
+  } else if (still_ && model_t_ - still_since_t_ >= kBlockedAfterS) {
+    state = MotionState::kBlocked;
   } else {
-    state = std::abs(v) < kStillM_s ? MotionState::kBlocked
-            : v > 0.0               ? MotionState::kOpening
-                                    : MotionState::kClosing;
+    // Told to move, still, not yet long enough to call it blocked: the state of the command.
+    state = speed_.open != 0 ? MotionState::kOpening : MotionState::kClosing;
   }
   sensorhand::DumpSample d;
   d.v_open = 0;  // communications mode: no electrodes
@@ -180,10 +188,7 @@ sensorhand::DumpSample SensorHandEmulator::Sample() const {
   const std::uint8_t pad = sensorhand::ForceRaw(force / 3.0);  // ours: shared by three pads
   d.f_pad = {pad, pad, pad};
   d.current = sensorhand::CurrentRaw(model_->current_a());
-  d.opening = sensorhand::OpeningRaw(model_->opening_m());
-  d.speed = speed_;
-  d.counter = counter_;
-  d.seq = seq_;
+  // That is all a stock hand sends: no opening, speed setting or counter on the wire.
   return d;
 }
 

@@ -1,7 +1,9 @@
 #pragma once
 /// @file An Otto Bock SensorHand Speed on a pty (drivers/sensorhand/PROTOCOL.md): the serial
-/// protocol byte for byte (0x75 speeds, 0x73/0x7A stream start/stop, their echoes, one stream
-/// frame every 12 ms while the stream is on) over a model of the hand's mechanics.
+/// protocol byte for byte as a stock hand speaks it (0x75 speeds, 0x73/0x7A stream start/stop,
+/// their echoes, one stream frame of the published 9 data bytes every 12 ms while the stream is
+/// on, and nothing more) over a model of the hand's mechanics. The model's opening stays inside
+/// (tests read it as ground truth); it is never put on the wire.
 ///
 /// The mechanics sit behind SensorHandModel so that the simulation can stand in for them later;
 /// KinematicSensorHand is the stand-alone one: a speed-driven finger pair (TrapezoidAxis:
@@ -101,7 +103,9 @@ class SensorHandEmulator final : public DeviceEmulator {
 
   SensorHandModel& model() { return *model_; }
   bool streaming() const { return streaming_; }
+  /// The speed setting in force (not on the wire: the echo shows each command once).
   sensorhand::SpeedSetting speed() const { return speed_; }
+  /// 0x75 commands executed since power-up, mod 256 (ground truth for tests; not on the wire).
   std::uint8_t counter() const { return counter_; }
   std::uint64_t samples_sent() const { return samples_sent_; }
   /// Bytes the hand threw away (damaged or partial frames).
@@ -112,6 +116,9 @@ class SensorHandEmulator final : public DeviceEmulator {
 
   /// A partial frame older than this is forgotten (s) (ours: the source gives no timeout).
   static constexpr double kFrameGapS = 0.05;
+  /// A speed set and the fingers still for this long: the state byte says blocked (s) (ours: a
+  /// stall detector needs a time window; at once, every start from rest would look blocked).
+  static constexpr double kBlockedAfterS = 0.02;
 
  private:
   void Execute(const sensorhand::Command& c, double t_s, std::vector<std::uint8_t>* out);
@@ -129,8 +136,9 @@ class SensorHandEmulator final : public DeviceEmulator {
   double next_sample_t_ = 0.0;
   sensorhand::SpeedSetting speed_;
   std::uint8_t counter_ = 0;
-  std::uint16_t seq_ = 0;
   std::uint64_t samples_sent_ = 0;
+  double still_since_t_ = 0.0;  ///< since when the fingers have been still (if still_)
+  bool still_ = true;
 };
 
 /// A hand with defaults: KinematicSensorHand with a 5 cm object between the pads (so Close has

@@ -12,7 +12,6 @@ constexpr double kBatteryFullV = 8.4;  // source: 238 -> 8.4 V
 constexpr double kBatteryFullRaw = 238.0;
 constexpr double kCurrentFullA = 1.5;  // source: 141 -> 1.5 A
 constexpr double kCurrentFullRaw = 141.0;
-constexpr double kOpeningUnitM = 1e-5;                       // ours: 10 um
 constexpr double kSpeedSteps = kSpeedMax - (kSpeedMin - 1);  // 85
 
 std::uint8_t ClampByte(double v) {
@@ -65,14 +64,8 @@ Parse TryParse(const std::uint8_t* p, std::size_t n, std::size_t* used, Reply* o
     s.f_bracket = d[4];
     s.f_pad = {d[5], d[6], d[7]};
     s.current = d[8];
-    s.opening = static_cast<std::uint16_t>((d[9] << 8) | d[10]);
-    s.speed = {d[11], d[12]};
-    s.counter = d[13];
-    s.seq = static_cast<std::uint16_t>((d[14] << 8) | d[15]);
-    if (s.state > static_cast<std::uint8_t>(MotionState::kBlocked) || s.opening > kMaxOpeningRaw ||
-        !IsValid(s.speed)) {
-      return Parse::kBad;
-    }
+    // Every data byte may take any value on a stock hand (its state values are not published),
+    // so LEN and the checksum are the only checks.
     out->kind = Reply::Kind::kDump;
     out->speed = {};
     out->dump = s;
@@ -112,13 +105,6 @@ bool IsValid(const SpeedSetting& s) {
 
 double ForceN(std::uint8_t raw) { return raw * (kForceFullN / kForceFullRaw); }
 std::uint8_t ForceRaw(double force_n) { return ClampByte(force_n * (kForceFullRaw / kForceFullN)); }
-
-double OpeningM(std::uint16_t raw) { return raw * kOpeningUnitM; }
-std::uint16_t OpeningRaw(double opening_m) {
-  if (!(opening_m > 0.0)) return 0;
-  return static_cast<std::uint16_t>(
-      std::min<double>(kMaxOpeningRaw, std::round(opening_m / kOpeningUnitM)));
-}
 
 double BatteryV(std::uint8_t raw) { return raw * (kBatteryFullV / kBatteryFullRaw); }
 std::uint8_t BatteryRaw(double volts) {
@@ -187,13 +173,6 @@ std::vector<std::uint8_t> EncodeDump(const DumpSample& d) {
       d.f_pad[1],
       d.f_pad[2],
       d.current,
-      static_cast<std::uint8_t>(d.opening >> 8),
-      static_cast<std::uint8_t>(d.opening & 0xFF),
-      d.speed.open,
-      d.speed.close,
-      d.counter,
-      static_cast<std::uint8_t>(d.seq >> 8),
-      static_cast<std::uint8_t>(d.seq & 0xFF),
   };
   std::vector<std::uint8_t> f = EncodeFrame(data);  // [LEN][data][CS], CS over LEN + data
   f.insert(f.begin(), kDumpMarker);

@@ -5,8 +5,9 @@
 /// and the hand's data stream ("dump mode") sends frames marked by a leading 0xFF:
 ///   [0xFF][LEN][DATA: LEN - 1 bytes][CS]   CS = (LEN + sum of DATA) mod 256.
 /// Commands used: 0x75 open/close speeds, 0x73 start and 0x7A stop of the data stream; the hand
-/// echoes each. The stream's first 9 data bytes are the source's layout; the 7 after them
-/// (opening, speed setting, command counter, sample number) are ours (PROTOCOL.md says why).
+/// echoes each. A stream frame carries the 9 data bytes a stock hand sends (the source's layout:
+/// electrode voltages, battery, state, bracket and pad forces, current; LEN 10) and nothing
+/// else: no finger position (the driver estimates it, sensorhand/opening_estimator.h).
 ///
 /// Pure functions and two small incremental decoders (one for each direction) that take bytes
 /// in any split and resynchronise after garbage, used by both the driver
@@ -36,19 +37,14 @@ inline constexpr std::uint8_t kDumpMarker = 0xFF;
 inline constexpr std::uint8_t kSpeedMin = 0x31;
 inline constexpr std::uint8_t kSpeedMax = 0x85;
 
-/// Data bytes of a stream frame: 9 from the source, then 7 of ours.
-inline constexpr std::size_t kSourceDumpBytes = 9;
-inline constexpr std::size_t kDumpDataBytes = kSourceDumpBytes + 7;
+/// Data bytes of a stream frame: the 9 of the source (publish_dump reads data[0..8]).
+inline constexpr std::size_t kDumpDataBytes = 9;
 /// The stream frame's LEN byte (data bytes + the checksum).
 inline constexpr std::uint8_t kDumpLen = static_cast<std::uint8_t>(kDumpDataBytes + 1);
 /// Whole stream frame: marker, LEN, data, checksum.
 inline constexpr std::size_t kDumpFrameBytes = 2 + kDumpDataBytes + 1;
 /// Stream period: one frame every 12 ms (source: "every 12 ms").
 inline constexpr double kDumpPeriodS = 0.012;
-
-/// Largest opening a stream frame may report, in its 10 um units (0.2 m: twice the robot's hand
-/// range); a larger value marks a damaged or false frame.
-inline constexpr std::uint16_t kMaxOpeningRaw = 20000;
 
 /// The two speed bytes of command 0x75: at most one of them non-zero.
 struct SpeedSetting {
@@ -65,18 +61,21 @@ bool IsValidSpeedByte(std::uint8_t b);
 /// Both bytes valid and not both non-zero.
 bool IsValid(const SpeedSetting& s);
 
-/// The hand's motion states as reported in the stream's state byte (our values: the source
-/// names the byte but not its values).
+/// The hand's motion states as reported in the stream's state byte. The values are OURS: the
+/// source names the byte ("state number of the hand's internal state machine", no conversion)
+/// but not its values; the emulator sends these and the driver reads them. A real hand's values
+/// would have to be found by watching its stream (PROTOCOL.md); unknown values carry no
+/// information for the driver.
 enum class MotionState : std::uint8_t {
   kIdle = 0,     ///< speeds 0, fingers still
-  kOpening = 1,  ///< fingers opening
-  kClosing = 2,  ///< fingers closing
-  kBlocked = 3,  ///< a speed is set but the fingers do not move (object, end stop, stall)
+  kOpening = 1,  ///< fingers opening (or told to and not yet found blocked)
+  kClosing = 2,  ///< fingers closing (or told to and not yet found blocked)
+  kBlocked = 3,  ///< a speed is set but the fingers have not moved for a while (object, end stop)
 };
 
-/// One stream sample (one 0xFF frame's data).
+/// One stream sample: one 0xFF frame's 9 data bytes, in the source's layout (hex_serial
+/// hand_node, publish_dump), as a stock SensorHand Speed sends them.
 struct DumpSample {
-  // Source layout (hex_serial hand_node, publish_dump):
   std::uint8_t v_open = 0;              ///< electrode voltage, open channel (0..85 -> 0..1.5 V)
   std::uint8_t v_close = 0;             ///< electrode voltage, close channel (0..85 -> 0..1.5 V)
   std::uint8_t v_bat = 0;               ///< supply voltage (238 -> 8.4 V)
@@ -84,11 +83,6 @@ struct DumpSample {
   std::uint8_t f_bracket = 0;           ///< bracket force = grip force (0..110 -> 0..120 N)
   std::array<std::uint8_t, 3> f_pad{};  ///< pad forces (same scale)
   std::uint8_t current = 0;             ///< supply current (0..141 -> 0..1.5 A)
-  // Ours:
-  std::uint16_t opening = 0;  ///< pad distance, 10 um units, big-endian on the wire
-  SpeedSetting speed;         ///< the speed setting in force (the last executed 0x75)
-  std::uint8_t counter = 0;   ///< 0x75 commands executed since power-up, mod 256
-  std::uint16_t seq = 0;      ///< stream frames sent since power-up, mod 65536, big-endian
   bool operator==(const DumpSample&) const = default;
 };
 
@@ -98,10 +92,6 @@ struct DumpSample {
 double ForceN(std::uint8_t raw);
 /// Force byte for a force (rounded, clamped to 0..255).
 std::uint8_t ForceRaw(double force_n);
-/// Pad distance (m) from the stream's opening field.
-double OpeningM(std::uint16_t raw);
-/// The stream's opening field for a pad distance (rounded, clamped to 0..kMaxOpeningRaw).
-std::uint16_t OpeningRaw(double opening_m);
 /// Supply voltage (source scale: 238 -> 8.4 V) and its byte.
 double BatteryV(std::uint8_t raw);
 std::uint8_t BatteryRaw(double volts);
@@ -134,7 +124,7 @@ std::vector<std::uint8_t> EncodeDumpStop();
 
 /// Hand to host: the echo of a 0x75 command, [03][open][close][CS].
 std::vector<std::uint8_t> EncodeSpeedEcho(const SpeedSetting& s);
-/// Hand to host: a stream frame [FF][LEN][16 data bytes][CS].
+/// Hand to host: a stream frame [FF][0A][9 data bytes][CS].
 std::vector<std::uint8_t> EncodeDump(const DumpSample& d);
 
 // --- Decoders ---------------------------------------------------------------------------------
@@ -161,7 +151,8 @@ struct Reply {
 std::vector<std::uint8_t> Encode(const Reply& r);
 
 /// Incremental decoder. Feed it bytes in any split; it emits every complete frame that passes
-/// its checks (length, checksum, command code, field ranges) and drops one byte at a time from
+/// its checks (length, checksum, command code, speed bytes; a stream frame has only its LEN and
+/// checksum to check, as its 9 bytes may take any value) and drops one byte at a time from
 /// anything else until it finds the next good frame. The same bytes give the same frames
 /// whatever the split.
 template <class Item>

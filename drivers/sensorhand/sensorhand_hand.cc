@@ -11,6 +11,7 @@ namespace {
 
 using device::Status;
 using sensorhand::DumpSample;
+using sensorhand::MotionState;
 using sensorhand::Reply;
 using sensorhand::SpeedSetting;
 
@@ -18,16 +19,13 @@ constexpr double kPollS = 0.003;             // the I/O thread's read wait
 constexpr double kStreamRetryS = 0.1;        // 0x73 at most this often while the stream is silent
 constexpr double kDisconnectedFailS = 0.05;  // a vanished port fails a call after this
 constexpr std::size_t kHistory = 16;         // samples kept
-constexpr int kStallSamples = 5;             // window of the stall test (60 ms)
-constexpr double kStallFraction = 0.05;      // moved less than this share of the setting's
-constexpr double kStallMinM = 0.00005;       // travel in it (clamped to 0.05..0.2 mm): stalled
-constexpr double kStallMaxM = 0.0002;
-constexpr std::uint16_t kMovingRaw = 5;  // > 0.05 mm over 2 samples: moving
-constexpr std::uint16_t kMeetRaw = 30;   // opening < 0.3 mm: the fingers meet
-constexpr int kLostAfter = 2;     // late samples with the old counter before a command is lost
-constexpr int kMaxReversals = 3;  // Open() gives up hunting after this many turns
-
-bool SeqAfter(std::uint16_t a, std::uint16_t b) { return static_cast<std::int16_t>(a - b) > 0; }
+constexpr int kForceSettledSamples = 5;      // the grip force has not risen over 5 samples (60 ms)
+constexpr int kVotes = 2;          // late samples that must show a setting before it is believed
+constexpr int kContradictions = 3;  // late samples in a row against known_: an anomaly
+constexpr double kStillM_s = 0.001;  // estimated slower than this: the fingers are still
+constexpr double kContactN = 0.5;    // a grip force above this: the pads touch an object
+constexpr double kEndMarginM = 0.005;  // "at an end stop": this near it, beyond the uncertainty
+constexpr int kMaxReversals = 3;     // Open() gives up hunting after this many turns
 
 double Seconds(std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double>(d).count();
@@ -36,6 +34,16 @@ double Seconds(std::chrono::steady_clock::duration d) {
 void Check(bool ok, const char* field, double value, const char* expected) {
   if (!ok)
     throw InputError("", std::string("sensorhand.") + field, std::to_string(value), expected);
+}
+
+sensorhand::HandMotionModel ModelOf(const SensorHandOptions& o) {
+  sensorhand::HandMotionModel m;
+  m.max_opening_m = o.max_opening_m;
+  m.full_speed_m_s = o.full_speed_m_s;
+  m.full_force_n = o.full_force_n;
+  m.accel_m_s2 = o.accel_m_s2;
+  m.speed_error = o.speed_error;
+  return m;
 }
 
 }  // namespace
@@ -53,8 +61,10 @@ SerialConfig SensorHandHand::SerialConfigFor(std::string port) {
 SensorHandHand::SensorHandHand(std::unique_ptr<ByteLink> link, SensorHandOptions options)
     : link_(std::move(link)),
       options_(options),
-      slow_byte_(sensorhand::SpeedByteAtMost(options.slow_speed_m_s / options.full_speed_m_s)) {
+      slow_byte_(sensorhand::SpeedByteAtMost(options.slow_speed_m_s / options.full_speed_m_s)),
+      t0_(Clock::now()) {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
   Check(link_ != nullptr, "link", 0, "a serial link");
   Check(positive(options_.max_opening_m), "max_opening_m", options_.max_opening_m, "> 0 m");
   Check(positive(options_.max_force_n), "max_force_n", options_.max_force_n, "> 0 N");
@@ -65,18 +75,28 @@ SensorHandHand::SensorHandHand(std::unique_ptr<ByteLink> link, SensorHandOptions
         "slow_speed_m_s", options_.slow_speed_m_s, "> 0 m/s and at most full_speed_m_s");
   Check(positive(options_.opening_tolerance_m), "opening_tolerance_m", options_.opening_tolerance_m,
         "> 0 m");
-  Check(positive(options_.latency_s), "latency_s", options_.latency_s, "> 0 s");
+  Check(non_negative(options_.latency_s), "latency_s", options_.latency_s, ">= 0 s");
+  Check(non_negative(options_.initial_opening_m) &&
+            options_.initial_opening_m <= options_.max_opening_m,
+        "initial_opening_m", options_.initial_opening_m, "0..max_opening_m");
+  Check(non_negative(options_.initial_uncertainty_m), "initial_uncertainty_m",
+        options_.initial_uncertainty_m, ">= 0 m");
+  Check(non_negative(options_.speed_error) && options_.speed_error < 1.0, "speed_error",
+        options_.speed_error, "0 to 1 (a share)");
   Check(positive(options_.call_timeout_s), "call_timeout_s", options_.call_timeout_s, "> 0 s");
   Check(options_.stream_timeout_s >= 2 * sensorhand::kDumpPeriodS, "stream_timeout_s",
         options_.stream_timeout_s, "at least two stream periods (0.024 s)");
   Check(options_.fresh_s >= options_.stream_timeout_s, "fresh_s", options_.fresh_s,
         "at least stream_timeout_s");
-  Check(std::isfinite(options_.transit_s) && options_.transit_s >= 0.0, "transit_s",
-        options_.transit_s, ">= 0 s");
+  Check(non_negative(options_.transit_s), "transit_s", options_.transit_s, ">= 0 s");
+  Check(positive(options_.unresolved_s), "unresolved_s", options_.unresolved_s, "> 0 s");
+  estimator_ = sensorhand::OpeningEstimator(ModelOf(options_), 0.0, options_.initial_opening_m,
+                                            options_.initial_uncertainty_m);
   const Clock::time_point now = Clock::now();
   last_empty_t_ = now;
   last_sample_t_ = now - std::chrono::hours(1);
   last_stream_start_ = last_sample_t_;
+  known_since_ = now;
   goal_.id = next_goal_id_++;  // hold: stop the fingers if they move when we connect
   thread_ = std::thread([this] { IoLoop(); });
 }
@@ -100,14 +120,15 @@ SensorHandHand::~SensorHandHand() {
   thread_.join();
 }
 
+double SensorHandHand::ToS(Clock::time_point t) const { return Seconds(t - t0_); }
+
 // --- The I/O thread ---------------------------------------------------------------------------
 
 void SensorHandHand::IoLoop() {
   std::vector<std::uint8_t> out;
   for (;;) {
     ReadOnce(kPollS);
-    // Drain: what is decided next rests on everything that has arrived, and a command's
-    // reference sample is the newest one (see Pending).
+    // Drain: what is decided next rests on everything that has arrived (echoes above all).
     while (ReadOnce(0.0)) {
     }
     out.clear();
@@ -117,17 +138,13 @@ void SensorHandHand::IoLoop() {
       Step(Clock::now(), &out);
     }
     if (!out.empty()) {
+      const Clock::time_point t_begin = Clock::now();
       const Status w = link_->Write(out);
       const Clock::time_point t_w = Clock::now();
       std::lock_guard<std::mutex> lock(mu_);
       if (w != Status::kOk) link_status_ = w;
       if (pending_ && !pending_->written) {
-        // Samples the hand may have sent before the command reached it: those made since the
-        // reference sample could have been made (it arrived after t_floor, so it was made after
-        // t_floor - transit) until the command arrives (t_w + transit), one per period, plus one.
-        const double span = Seconds(t_w - pending_->t_floor) + 2.0 * options_.transit_s;
-        const int n = static_cast<int>(std::ceil(span / sensorhand::kDumpPeriodS)) + 1;
-        pending_->seq_after = static_cast<std::uint16_t>(pending_->seq_ref + std::min(n, 30000));
+        pending_->t_write_begin = t_begin;
         pending_->t_written = t_w;
         pending_->written = true;
       }
@@ -164,9 +181,22 @@ void SensorHandHand::HandleReply(const Reply& r, Clock::time_point now) {
       HandleSample(r.dump, now);
       break;
     case Reply::Kind::kSpeedEcho:
-      // Counted only: an echo is 4 bytes under an 8-bit sum, which a resynchronisation inside
-      // a damaged stream frame can fake; the stream's counter decides (PROTOCOL.md).
       ++stats_.echoes;
+      if (pending_ && pending_->written && r.speed == pending_->cmd) {
+        // The hand answers a 0x75 it executed with its two speed bytes: it took the command
+        // between the write and now.
+        const double t_begin = ToS(pending_->t_write_begin);
+        const double t_echo = ToS(now);
+        const double delay = Seconds(now - pending_->t_written);
+        stats_.echo_delay_max_s = std::max(stats_.echo_delay_max_s, delay);
+        const double echoed = static_cast<double>(stats_.executed - stats_.executed_unechoed + 1);
+        stats_.echo_delay_mean_s += (delay - stats_.echo_delay_mean_s) / echoed;
+        // Taken between the write and the echo's arrival: the middle of that window is off by
+        // at most half of it, however the delays split between line, hand and scheduler.
+        ResolveExecuted(0.5 * (t_begin + t_echo), 0.5 * (t_echo - t_begin));
+      } else {
+        ++stats_.stray_echoes;  // a late echo of a command already judged, or a false frame
+      }
       break;
     case Reply::Kind::kDumpStartEcho:
     case Reply::Kind::kDumpStopEcho:
@@ -174,58 +204,163 @@ void SensorHandHand::HandleReply(const Reply& r, Clock::time_point now) {
   }
 }
 
-void SensorHandHand::HandleSample(const DumpSample& d, Clock::time_point now) {
-  const bool first = samples_ == 0;
-  if (!history_.empty()) {
-    const std::uint16_t gap = static_cast<std::uint16_t>(d.seq - history_.back().d.seq);
-    if (gap == 0 || gap >= 1000) {
-      history_.clear();  // the hand restarted its numbering (power cycle): start afresh
-    } else {
-      stats_.missed_samples += gap - 1u;
-    }
+SensorHandHand::Evidence SensorHandHand::Classify(std::uint8_t state) {
+  switch (static_cast<MotionState>(state)) {
+    case MotionState::kIdle:
+      return Evidence::kStopped;
+    case MotionState::kBlocked:
+      return Evidence::kRunning;
+    case MotionState::kOpening:
+      return Evidence::kOpenWay;
+    case MotionState::kClosing:
+      return Evidence::kCloseWay;
   }
+  return Evidence::kNone;
+}
+
+bool SensorHandHand::Consistent(const SpeedSetting& s, Evidence e) {
+  if (e == Evidence::kNone) return false;
+  if (s.stopped()) return e == Evidence::kStopped;
+  if (s.open != 0) return e == Evidence::kOpenWay || e == Evidence::kRunning;
+  return e == Evidence::kCloseWay || e == Evidence::kRunning;
+}
+
+bool SensorHandHand::LateEnough(Clock::time_point since) const {
+  // The sample arrived after last_empty_t_, so the hand made it after last_empty_t_ - transit;
+  // the setting reached the hand by since + transit; then the fingers need up to a full-speed
+  // stop (v / a) and a period to show it in the state byte.
+  const double settle = options_.full_speed_m_s / options_.accel_m_s2 + sensorhand::kDumpPeriodS;
+  return Seconds(last_empty_t_ - since) >= 2.0 * options_.transit_s + settle;
+}
+
+void SensorHandHand::HandleSample(const DumpSample& d, Clock::time_point now) {
   ++samples_;
   ++stats_.samples;
   last_sample_t_ = now;
-  history_.push_back({d, now, last_empty_t_});
+  history_.push_back({d, now});
   if (history_.size() > kHistory) history_.pop_front();
-
-  bool resolved = false;
-  if (pending_ && pending_->written) {
-    const std::uint8_t advanced = static_cast<std::uint8_t>(d.counter - pending_->counter0);
-    if (advanced == 1 && d.speed == pending_->cmd) {
-      // Executed: the hand counted it and runs with it.
-      executed_.push_back(pending_->cmd);
-      ++stats_.executed;
-      acked_goal_id_ = std::max(acked_goal_id_, pending_->goal_id);
-      pending_.reset();
-      resolved = true;
-    } else if (advanced == 0 && d.speed == pending_->before) {
-      // Made after the command must have reached the hand: numbered beyond the bound, or
-      // arrived after a moment when the link was empty 2 transits after the write (so made
-      // after t_w + transit).
-      const bool late = SeqAfter(d.seq, pending_->seq_after) ||
-                        Seconds(last_empty_t_ - pending_->t_written) >= 2.0 * options_.transit_s;
-      if (late && ++pending_->stale >= kLostAfter) {
-        // Two samples made after the command must have reached the hand still show the old
-        // counter: it never arrived whole. Safe to send again.
-        ++stats_.lost;
-        last_lost_ = pending_->cmd;
-        pending_.reset();
-        resolved = true;
-      }
-    } else {
-      // Something else changed the hand (a power cycle, another host): believe the stream.
-      ++stats_.anomalies;
-      pending_.reset();
-      resolved = true;
-    }
+  const double t = ToS(now);
+  const double force = sensorhand::ForceN(d.f_bracket);
+  // The estimate under the setting the driver knows, before this sample can fix it.
+  sensorhand::OpeningEstimator prior = estimator_;
+  prior.AdvanceTo(t);
+  estimator_.Observe(t, force, d.state);
+  const Evidence ev = Classify(d.state);
+  if (!setting_known_) {
+    // Connecting: a hand that reports idle runs at speed 0; anything else gets a stop, sent
+    // even though the driver assumes speed 0 (a stop twice changes nothing).
+    setting_known_ = true;
+    if (ev != Evidence::kStopped) resend_anyway_ = true;
+    known_shown_ = ev == Evidence::kStopped;
   }
-  if (pending_) return;  // the setting stays as it was until the command is resolved
-  if (!first && !resolved && d.counter != known_counter_) ++stats_.anomalies;
-  if (first || d.speed != known_) setting_since_seq_ = d.seq;
-  known_ = d.speed;
-  known_counter_ = d.counter;
+
+  if (pending_ && pending_->written) {
+    pending_->since_write.push_back({t, force, d.state});
+    // The echo lost (or late), the state byte tells which setting is in force. The two always
+    // differ in what it shows (Step never changes a speed within a direction without a stop).
+    // A sample that shows only the new one proves it at once if the samples already showed
+    // the old one settled (under it the state stays in its set: idle stays idle, opening or
+    // blocked stays so); else, and to call the command lost, only samples made after the
+    // command must have reached the hand and the fingers settled count.
+    bool shows_new = Consistent(pending_->cmd, ev);
+    bool shows_old = Consistent(pending_->before, ev);
+    if (shows_new && shows_old && ev == Evidence::kRunning && force <= kContactN) {
+      // Blocked without a force: at an end stop, which a reversal's two settings put at
+      // opposite ends. Where each would have the fingers tells them apart (an open speed lost
+      // at the end stop stays blocked there; the close would have left it long since).
+      const double margin = kEndMarginM + prior.uncertainty_m();
+      auto at_its_end = [&](const SpeedSetting& s, double y) {
+        return s.open != 0 ? y >= options_.max_opening_m - margin : y <= margin;
+      };
+      shows_old = at_its_end(pending_->before, prior.opening_m());
+      shows_new = at_its_end(pending_->cmd, Hypothesis(*pending_, t).opening_m());
+    }
+    const bool late = LateEnough(pending_->t_written);
+    // Idle (speeds 0) and blocked (a speed set) need no settling: each is impossible under the
+    // other kind of setting.
+    const bool definite = ev == Evidence::kStopped || ev == Evidence::kRunning;
+    if (shows_new && !shows_old && (late || definite || pending_->before_settled)) {
+      ++pending_->votes_new;
+    }
+    if (shows_old && !shows_new && late) ++pending_->votes_old;
+    if (pending_->votes_new >= kVotes && pending_->votes_new >= pending_->votes_old + kVotes) {
+      ++stats_.executed_unechoed;
+      const double t_exec = ToS(pending_->t_write_begin) + options_.latency_s;
+      ResolveExecuted(t_exec, options_.transit_s);
+      known_shown_ = true;  // these very samples showed it
+    } else if (pending_->votes_old >= kVotes && pending_->votes_new == 0) {
+      // Two settled samples still show the old setting and none the new: the command never
+      // arrived whole. Safe to send again.
+      ++stats_.lost;
+      last_lost_ = pending_->cmd;
+      pending_.reset();
+    }
+    return;
+  }
+  if (pending_ || ev == Evidence::kNone) return;
+  if (Consistent(known_, ev)) {
+    // Samples read after the command was resolved were made after it took effect (the hand
+    // finishes a frame before it answers a command): from now on the state stays in this set.
+    contradictions_ = 0;
+    known_shown_ = true;
+    return;
+  }
+  if (!LateEnough(known_since_) || ++contradictions_ != kContradictions) return;
+  // The stream disagrees with the setting the driver knows: a hand reset (power cycle),
+  // another host, or a false echo. Counted; idle is believed, since its bytes are known.
+  ++stats_.anomalies;
+  if (ev == Evidence::kStopped) {
+    known_ = sensorhand::kStop;
+    known_shown_ = true;
+    known_since_ = now;
+    known_since_sample_ = samples_;
+    estimator_.Execute(t, sensorhand::kStop, options_.transit_s);
+  }
+}
+
+sensorhand::OpeningEstimator SensorHandHand::Hypothesis(const Pending& p, double t_s) const {
+  // The samples' forces only: their states were made under a setting not yet known.
+  constexpr std::uint8_t kNoState = 0xFF;
+  const double t_exec = ToS(p.t_write_begin) + options_.latency_s;
+  sensorhand::OpeningEstimator e = p.at_write;
+  bool executed = false;
+  for (const Observation& o : p.since_write) {
+    if (o.t_s >= t_s) break;
+    if (!executed && o.t_s >= t_exec) {
+      e.Execute(t_exec, p.cmd, 0.0);
+      executed = true;
+    }
+    e.Observe(o.t_s, o.force_n, kNoState);
+  }
+  if (!executed) e.Execute(std::min(t_exec, t_s), p.cmd, 0.0);
+  e.AdvanceTo(t_s);
+  return e;
+}
+
+void SensorHandHand::ResolveExecuted(double t_exec_s, double uncertainty_s) {
+  Pending p = std::move(*pending_);
+  pending_.reset();
+  // Replay the samples since the write on the estimate from before it, with the command taking
+  // effect at t_exec_s: the running estimate assumed the old setting meanwhile.
+  sensorhand::OpeningEstimator e = p.at_write;
+  std::size_t i = 0;
+  for (; i < p.since_write.size() && p.since_write[i].t_s < t_exec_s; ++i) {
+    e.Observe(p.since_write[i].t_s, p.since_write[i].force_n, p.since_write[i].state);
+  }
+  e.Execute(t_exec_s, p.cmd, uncertainty_s);
+  for (; i < p.since_write.size(); ++i) {
+    e.Observe(p.since_write[i].t_s, p.since_write[i].force_n, p.since_write[i].state);
+  }
+  estimator_ = e;
+  executed_.push_back(p.cmd);
+  ++stats_.executed;
+  acked_goal_id_ = std::max(acked_goal_id_, p.goal_id);
+  known_ = p.cmd;
+  known_since_ = p.t_written;
+  known_resolved_t_ = last_sample_t_;
+  known_since_sample_ = samples_ - std::min<std::uint64_t>(samples_, p.since_write.size());
+  known_shown_ = false;
+  contradictions_ = 0;
 }
 
 void SensorHandHand::Step(Clock::time_point now, std::vector<std::uint8_t>* out) {
@@ -245,23 +380,56 @@ void SensorHandHand::Step(Clock::time_point now, std::vector<std::uint8_t>* out)
     last_stream_start_ = now;
     ++stats_.stream_starts;
   }
-  // One command in flight; decisions on fresh samples only, one per sample.
-  if (pending_ || silent || samples_ == decided_samples_) return;
-  decided_samples_ = samples_;
-  if (samples_ <= goal_.sample_mark) return;
-  const SpeedSetting want = Control();
-  if (want == known_) {
+  if (pending_) {
+    if (pending_->written && !silent &&
+        Seconds(now - pending_->t_written) > options_.unresolved_s &&
+        pending_->since_write.size() >= 2 * kVotes) {
+      // Samples keep coming but neither an echo nor the state byte tells: give up knowing, and
+      // stop the fingers (a stop is safe whichever setting is in force).
+      ++stats_.unresolved;
+      unresolved_.push_back(pending_->cmd);
+      pending_.reset();
+      // The setting since is one of two: the estimate may be off by anything. It runs on as
+      // stopped (a stop goes out next; no end-stop fix under a setting it cannot know), lost.
+      estimator_.Execute(ToS(now), sensorhand::kStop, 0.0);
+      estimator_.MarkLost(options_.max_opening_m);
+      resend_anyway_ = true;
+      Goal hold;
+      hold.id = next_goal_id_++;
+      hold.sample_mark = samples_;
+      goal_ = hold;
+    }
+    return;  // one command in flight
+  }
+  if (silent || samples_ <= goal_.sample_mark) return;
+  const Goal before_control = goal_;
+  SpeedSetting want = Control(now);
+  if (!want.stopped() && !known_.stopped() && (want.open != 0) == (known_.open != 0) &&
+      want != known_) {
+    // Another speed the same way: stop first, so that the state byte tells the settings apart
+    // should the echo be lost.
+    want = sensorhand::kStop;
+    ++stats_.stops_inserted;
+  }
+  if (want == known_ && !resend_anyway_) {
     acked_goal_id_ = std::max(acked_goal_id_, goal_.id);
     return;
   }
+  // A speed waits until a sample has shown the setting in force: then the state byte proves at
+  // once which of the two is in force should the echo be lost (a stop never waits: idle proves
+  // it whatever came before).
+  if (!want.stopped() && !known_shown_) {
+    goal_ = before_control;  // decide again then, as if not asked now
+    return;
+  }
+  resend_anyway_ = false;
   Pending p;
   p.cmd = want;
   p.before = known_;
-  p.counter0 = known_counter_;
-  p.seq_ref = history_.back().d.seq;
-  p.t_floor = history_.back().arrived_after;
+  p.at_write = estimator_;
+  p.before_settled = known_shown_ && Consistent(known_, Classify(history_.back().d.state));
   p.goal_id = goal_.id;
-  pending_ = p;
+  pending_ = std::move(p);
   if (last_lost_ && *last_lost_ == want) ++stats_.resends;
   last_lost_.reset();
   ++stats_.commands;
@@ -277,10 +445,9 @@ double SensorHandHand::StopLead(double speed) const {
   return speed * options_.latency_s + speed * speed / (2.0 * options_.accel_m_s2);
 }
 
-SpeedSetting SensorHandHand::Control() {
+SpeedSetting SensorHandHand::Control(Clock::time_point now) {
   if (goal_.done) return sensorhand::kStop;
   const DumpSample& s = history_.back().d;
-  const double y = sensorhand::OpeningM(s.opening);
   const double force = sensorhand::ForceN(s.f_bracket);
   switch (goal_.kind) {
     case GoalKind::kHold:
@@ -297,9 +464,9 @@ SpeedSetting SensorHandHand::Control() {
         goal_.done = true;
         return sensorhand::kStop;
       }
-      if (force >= goal_.force_n || s.opening <= kMeetRaw || (known_.close != 0 && Stalled())) {
-        // At the force limit, stalled on the object, or the fingers meet: speed 0 holds the
-        // grip (the gear does not back-drive).
+      if (force >= goal_.force_n || (known_.close != 0 && (Blocked() || ForceSettled()))) {
+        // At the force limit, stalled on the object, or the fingers meet (blocked without a
+        // force): speed 0 holds the grip (the gear does not back-drive).
         goal_.done = true;
         return sensorhand::kStop;
       }
@@ -307,76 +474,116 @@ SpeedSetting SensorHandHand::Control() {
     }
 
     case GoalKind::kOpen: {
-      const double e = goal_.opening_m - y;
+      // The estimate when a command decided now takes effect (half a poll early on average).
+      sensorhand::OpeningEstimator ahead = estimator_;
+      ahead.AdvanceTo(ToS(now) + options_.latency_s + 0.5 * kPollS);
+      const double e = goal_.opening_m - ahead.opening_m();
       const double tol = options_.opening_tolerance_m;
       const double slow_zone = StopLead(options_.full_speed_m_s) + 0.004;
-      auto start = [&](int dir) -> SpeedSetting {
-        if (goal_.last_dir != 0 && dir != goal_.last_dir && ++goal_.reversals > kMaxReversals) {
+      // The lightest touch the hand keeps on an object it met: the slow speed's stall force.
+      const double light_n = options_.full_force_n * sensorhand::SpeedFraction(slow_byte_);
+      auto toward = [&](int dir, double distance) -> SpeedSetting {
+        const std::uint8_t b = distance > slow_zone ? sensorhand::kSpeedMax : slow_byte_;
+        return dir > 0 ? SpeedSetting{b, 0} : SpeedSetting{0, b};
+      };
+      if (estimator_.lost() && !goal_.homing) goal_.homing = true;
+      if (goal_.homing) {
+        if (!estimator_.lost()) {
+          // Fixed at the end stop: stop there, then on to the target from a known opening.
+          goal_.homing = false;
+          goal_.last_dir = 0;
+          goal_.reversals = 0;
+          goal_.at_object = false;
+          return sensorhand::kStop;
+        }
+        if (known_.open != 0) return known_;  // until the stream shows it blocked
+        if (!known_.stopped() || Moving()) return sensorhand::kStop;
+        return {sensorhand::kSpeedMax, 0};
+      }
+      if (known_.stopped()) {
+        if (Moving()) return sensorhand::kStop;  // let the fingers settle, then judge
+        if (goal_.contact) {
+          // Stopped on the object: ease a harder press off to a light touch first.
+          if (force > light_n) return {slow_byte_, 0};
+          goal_.contact = false;
+        }
+        if (goal_.to_end) {
+          // Into the end stop, whatever the estimate says, until the stream shows it blocked
+          // (or an object stops the fingers on the way to 0).
+          if (goal_.last_dir != 0) {
+            goal_.done = true;
+            return sensorhand::kStop;
+          }
+          const int dir = goal_.opening_m > 0.0 ? 1 : -1;
+          goal_.last_dir = dir;
+          return toward(dir, std::abs(e));
+        }
+        if (std::abs(e) <= tol || (e < 0.0 && goal_.at_object)) {
+          // There, or the target lies behind the object the pads met.
           goal_.done = true;
+          return sensorhand::kStop;
+        }
+        const int dir = e > 0.0 ? 1 : -1;
+        if (goal_.last_dir != 0 && dir != goal_.last_dir && ++goal_.reversals > kMaxReversals) {
+          goal_.done = true;  // hunting: give up
           return sensorhand::kStop;
         }
         goal_.last_dir = dir;
-        const std::uint8_t b = std::abs(e) > slow_zone ? sensorhand::kSpeedMax : slow_byte_;
-        return dir > 0 ? SpeedSetting{b, 0} : SpeedSetting{0, b};
-      };
-      if (known_.stopped()) {
-        if (Moving()) return sensorhand::kStop;  // let the fingers settle, then judge
-        if (std::abs(e) <= tol) {
-          goal_.done = true;
-          return sensorhand::kStop;
-        }
-        return start(e > 0.0 ? 1 : -1);
+        return toward(dir, std::abs(e));
       }
       const int dir = known_.open != 0 ? 1 : -1;
-      const double v = SpeedOf(dir > 0 ? known_.open : known_.close);
-      if (Stalled()) {
-        // Blocked: an object between the fingers, or an end stop.
+      if (goal_.contact) {
+        // Easing off the object: stop at a light touch.
+        if (dir > 0 && force > light_n) return known_;
+        goal_.contact = false;
+        return sensorhand::kStop;
+      }
+      if (dir < 0 && force > kContactN) {
+        // Closing onto an object: stop at the contact (then ease off, and go on only if the
+        // target lies the other way).
+        goal_.contact = true;
+        goal_.at_object = true;
+        return sensorhand::kStop;
+      }
+      if (Blocked()) {
+        // Blocked: at an end stop (the estimate is fixed there).
         goal_.done = true;
         return sensorhand::kStop;
       }
-      if (dir * e < -tol) return start(-dir);  // running the wrong way (a new goal)
-      if (dir * e <= StopLead(v)) return sensorhand::kStop;
-      if (v > SpeedOf(slow_byte_) && dir * e <= slow_zone) {
-        return dir > 0 ? SpeedSetting{slow_byte_, 0} : SpeedSetting{0, slow_byte_};
-      }
+      if (goal_.to_end) return known_;
+      // Stop when the fingers, stopped now, would come to rest at the target or beyond.
+      if (dir * (goal_.opening_m - ahead.RestOpening()) <= 0.0) return sensorhand::kStop;
       return known_;
     }
   }
   return sensorhand::kStop;
 }
 
-bool SensorHandHand::Stalled() const {
-  if (known_.stopped() || history_.empty()) return false;
-  const DumpSample& newest = history_.back().d;
-  // Enough samples under the current setting to judge.
-  if (!SeqAfter(newest.seq, static_cast<std::uint16_t>(setting_since_seq_ + kStallSamples - 1))) {
+bool SensorHandHand::Blocked() const {
+  // Only a sample read after the setting was resolved: one read between the write and the
+  // echo may have been made under the setting before (blocked at an end stop, say).
+  return !known_.stopped() && !history_.empty() &&
+         history_.back().d.state == static_cast<std::uint8_t>(MotionState::kBlocked) &&
+         history_.back().t > known_resolved_t_;
+}
+
+bool SensorHandHand::ForceSettled() const {
+  if (known_.close == 0 || history_.size() < static_cast<std::size_t>(kForceSettledSamples) ||
+      samples_ < known_since_sample_ + kForceSettledSamples) {
     return false;
   }
-  std::uint16_t lo = newest.opening, hi = newest.opening;
-  const std::uint16_t from = static_cast<std::uint16_t>(newest.seq - kStallSamples);
-  int seen = 0;
-  for (const Sample& h : history_) {
-    if (SeqAfter(from, h.d.seq)) continue;
-    lo = std::min(lo, h.d.opening);
-    hi = std::max(hi, h.d.opening);
-    ++seen;
-  }
-  // Judge only a window with most of its samples: after a dropout the first sample stands
-  // alone and shows no motion.
-  if (seen < kStallSamples - 1) return false;
-  // Stalled: the fingers covered less than 5% of what the setting asks for in the window
-  // (between 0.05 and 0.2 mm): against an object that is above 95% of the stall force.
-  const double expected_m =
-      SpeedOf(std::max(known_.open, known_.close)) * kStallSamples * sensorhand::kDumpPeriodS;
-  const double limit_m = std::clamp(kStallFraction * expected_m, kStallMinM, kStallMaxM);
-  return sensorhand::OpeningM(hi) - sensorhand::OpeningM(lo) < limit_m;
+  const std::uint8_t now = history_.back().d.f_bracket;
+  const std::uint8_t then = history_[history_.size() - kForceSettledSamples].d.f_bracket;
+  // Pressing, and the force has not risen by a count over 4 periods: the motor is at (within
+  // a few per cent of) its stall force.
+  return sensorhand::ForceN(now) > kContactN && now <= then;
 }
 
 bool SensorHandHand::Moving() const {
-  if (history_.size() < 3) return false;
-  const std::uint16_t a = history_.back().d.opening;
-  const std::uint16_t b = history_[history_.size() - 3].d.opening;
-  return (a > b ? a - b : b - a) > kMovingRaw;
+  if (std::abs(estimator_.velocity_m_s()) > kStillM_s) return true;
+  if (history_.empty()) return false;
+  const Evidence ev = Classify(history_.back().d.state);
+  return ev == Evidence::kOpenWay || ev == Evidence::kCloseWay;
 }
 
 bool SensorHandHand::Fresh(Clock::time_point now) const {
@@ -426,6 +633,13 @@ Status SensorHandHand::Open(double opening_m) {
   Goal g;
   g.kind = GoalKind::kOpen;
   g.opening_m = std::clamp(opening_m, 0.0, options_.max_opening_m);
+  if (g.opening_m <= options_.opening_tolerance_m) {
+    g.opening_m = 0.0;
+    g.to_end = true;
+  } else if (g.opening_m >= options_.max_opening_m - options_.opening_tolerance_m) {
+    g.opening_m = options_.max_opening_m;
+    g.to_end = true;
+  }
   return StartGoal(g);
 }
 
@@ -456,7 +670,7 @@ Status SensorHandHand::Read(device::HandState* state) {
   }
   const Sample& s = history_.back();
   state->t_s = Seconds(s.t.time_since_epoch());
-  state->opening_m = sensorhand::OpeningM(s.d.opening);
+  state->opening_m = estimator_.opening_m();
   state->grip_force_n = sensorhand::ForceN(s.d.f_bracket);
   state->moving = (!goal_.done && goal_.kind != GoalKind::kHold) || Moving() || !!pending_;
   return Status::kOk;
@@ -471,6 +685,28 @@ bool SensorHandHand::WaitIdle(double timeout_s) {
 std::vector<SpeedSetting> SensorHandHand::executed() const {
   std::lock_guard<std::mutex> lock(mu_);
   return executed_;
+}
+
+std::vector<SpeedSetting> SensorHandHand::unresolved() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return unresolved_;
+}
+
+SensorHandEstimate SensorHandHand::estimate() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  SensorHandEstimate e;
+  e.t_s = Seconds((t0_ + std::chrono::duration_cast<Clock::duration>(
+                             std::chrono::duration<double>(estimator_.time_s())))
+                      .time_since_epoch());
+  e.opening_m = estimator_.opening_m();
+  e.velocity_m_s = estimator_.velocity_m_s();
+  e.uncertainty_m = estimator_.uncertainty_m();
+  e.referenced = estimator_.referenced();
+  e.lost = estimator_.lost();
+  e.fixes = estimator_.fixes();
+  e.last_correction_m = estimator_.last_correction_m();
+  e.max_abs_correction_m = estimator_.max_abs_correction_m();
+  return e;
 }
 
 SensorHandStats SensorHandHand::stats() const {

@@ -3,8 +3,8 @@
 // the same bytes whole and in pseudo-random splits (the first input byte seeds the splits).
 // Checked, with __builtin_trap on a violation:
 //  - the splits give exactly the frames the whole buffer gives;
-//  - every decoded frame is valid (speeds, stream fields) and re-encodes to bytes found in the
-//    input, in order;
+//  - every decoded frame is valid (speed bytes; a stream frame's 9 data bytes may take any
+//    value) and re-encodes to bytes found in the input, in order;
 //  - nothing is lost or invented: the decoded frames' sizes, the discarded bytes and the bytes
 //    still held add up to the input size.
 
@@ -27,7 +27,7 @@ bool ValidItem(const Reply& r) {
     case Reply::Kind::kSpeedEcho:
       return IsValid(r.speed);
     case Reply::Kind::kDump:
-      return IsValid(r.dump.speed) && r.dump.opening <= kMaxOpeningRaw && r.dump.state <= 3;
+      return true;  // a stock frame's 9 data bytes may take any value
     default:
       return true;
   }

@@ -5,7 +5,8 @@
 // hex_serial/hand_node (A. Reiter, JKU Linz ROBIN, January 2014) linked from
 // wiki.ros.org/Robots/sensorhand_speed: sendCommand() builds [LEN][payload][CS] with CS the sum
 // of all bytes before it, LEN counting the checksum; the expected replies are in its
-// cmd->response tables; publish_dump() gives the stream's 9 source bytes and their scales.
+// cmd->response tables; publish_dump() gives the stream's 9 data bytes and their scales, and
+// its reader the frame: dump symbol 0xFF, LEN (data + checksum: 10), data, checksum.
 
 #include "sensorhand/sensorhand_codec.h"
 
@@ -85,11 +86,9 @@ TEST(SensorHandCodecSource, StreamFrameMarkerIsOutsideTheChecksum) {
   EXPECT_EQ(f.back(), static_cast<std::uint8_t>(kDumpLen + 0x10));
 }
 
-// --- Our stream layout ------------------------------------------------------------------------
-
-TEST(SensorHandCodecOurs, StreamFrameGolden) {
-  // Ours (PROTOCOL.md, "Stream frame"): 9 source bytes, then opening (BE, 10 um), open speed,
-  // close speed, command counter, sample number (BE).
+TEST(SensorHandCodecSource, StockStreamFrameGolden) {
+  // The frame a stock hand sends: publish_dump() reads data[0..8] (V_open, V_close, V_bat,
+  // state, F_bracket, F_pad1..3, I), so LEN = 9 + 1 = 0x0A; 12 bytes with marker and checksum.
   DumpSample d;
   d.v_open = 0;
   d.v_close = 0;
@@ -98,25 +97,36 @@ TEST(SensorHandCodecOurs, StreamFrameGolden) {
   d.f_bracket = 37;  // 40.4 N
   d.f_pad = {12, 12, 12};
   d.current = 46;
-  d.opening = 4200;  // 0.042 m
-  d.speed = {0x00, 0x52};
-  d.counter = 7;
-  d.seq = 0x0102;
-  // CS = 0x11 + 0xD2 + 0x02 + 0x25 + 3 * 0x0C + 0x2E + 0x10 + 0x68 + 0x52 + 0x07 + 0x01 + 0x02
-  //    = 0x230 -> 0x30.
-  const Bytes golden = {0xFF, 0x11, 0x00, 0x00, 0xD2, 0x02, 0x25, 0x0C, 0x0C, 0x0C,
-                        0x2E, 0x10, 0x68, 0x00, 0x52, 0x07, 0x01, 0x02, 0x30};
+  // CS = 0x0A + 0xD2 + 0x02 + 0x25 + 3 * 0x0C + 0x2E = 0x155 -> 0x55.
+  const Bytes golden = {0xFF, 0x0A, 0x00, 0x00, 0xD2, 0x02, 0x25, 0x0C, 0x0C, 0x0C, 0x2E, 0x55};
+  EXPECT_EQ(kDumpLen, 0x0A);
+  EXPECT_EQ(kDumpFrameBytes, 12u);
   EXPECT_EQ(EncodeDump(d), golden);
-  const auto got = [&] {
-    ReplyDecoder dec;
-    std::vector<Reply> out;
-    dec.Push(golden, &out);
-    return out;
-  }();
+  ReplyDecoder dec;
+  std::vector<Reply> got;
+  dec.Push(golden, &got);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].kind, Reply::Kind::kDump);
+  EXPECT_EQ(got[0].dump, d);
+  EXPECT_NEAR(ForceN(got[0].dump.f_bracket), 40.36, 0.01);
+  EXPECT_EQ(dec.discarded(), 0u);
+}
+
+TEST(SensorHandCodecSource, StreamFrameBytesMayTakeAnyValue) {
+  // The source publishes the state byte "no conversion" and gives no values: a stock hand's
+  // frame with a state we do not know is still a frame (the driver ignores the state then).
+  DumpSample d;
+  d.state = 0xC7;
+  d.v_open = 0x55;
+  d.current = 0xFF;
+  ReplyDecoder dec;
+  std::vector<Reply> got;
+  dec.Push(EncodeDump(d), &got);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dump, d);
-  EXPECT_NEAR(OpeningM(d.opening), 0.042, 1e-12);
 }
+
+// --- Our scales -------------------------------------------------------------------------------
 
 TEST(SensorHandCodecOurs, SpeedScale) {
   EXPECT_EQ(SpeedFraction(0), 0.0);
@@ -140,9 +150,6 @@ TEST(SensorHandCodecOurs, Validity) {
   EXPECT_FALSE(IsValid({0x31, 0x31}));  // both ways at once
   EXPECT_FALSE(IsValid({0x30, 0}));
   EXPECT_FALSE(IsValid({0, 0x86}));
-  EXPECT_EQ(OpeningRaw(0.1), 10000);
-  EXPECT_EQ(OpeningRaw(-1.0), 0);
-  EXPECT_EQ(OpeningRaw(1.0), kMaxOpeningRaw);
 }
 
 // --- Decoders ---------------------------------------------------------------------------------
@@ -184,10 +191,10 @@ TEST(SensorHandCodecDecoder, CommandsRoundTrip) {
 
 TEST(SensorHandCodecDecoder, RepliesRoundTrip) {
   DumpSample d;
-  d.opening = 8000;
-  d.speed = {0x85, 0};
-  d.counter = 255;
-  d.seq = 65535;
+  d.v_bat = 210;
+  d.f_bracket = 110;
+  d.f_pad = {36, 37, 38};
+  d.current = 141;
   d.state = 1;
   std::vector<Reply> replies = {
       {Reply::Kind::kDumpStartEcho, {}, {}},
@@ -216,14 +223,19 @@ TEST(SensorHandCodecDecoder, RejectsDamagedAndUnknownFrames) {
   // Commands we do not use (serial number 0x76, reset 0x6D): dropped as garbage.
   const std::uint8_t sn[] = {0x76};
   EXPECT_TRUE(DecodeCommands(EncodeFrame(sn)).empty());
-  // A stream frame in the source's own length (LEN 10: 9 data bytes): not ours, refused.
-  Bytes source_dump = {0xFF, 0x0A, 0, 0, 200, 0, 10, 0, 0, 0, 20};
-  source_dump.push_back(Checksum(std::span<const std::uint8_t>(source_dump).subspan(1)));
-  EXPECT_TRUE(DecodeReplies(source_dump).empty());
-  // Opening beyond kMaxOpeningRaw: refused.
-  DumpSample d;
-  d.opening = kMaxOpeningRaw + 1;
-  EXPECT_TRUE(DecodeReplies(EncodeDump(d)).empty());
+  // A stream frame of the stock length (LEN 10: 9 data bytes) decodes...
+  Bytes stock = {0xFF, 0x0A, 0, 0, 200, 0, 10, 0, 0, 0, 20};
+  stock.push_back(Checksum(std::span<const std::uint8_t>(stock).subspan(1)));
+  ASSERT_EQ(DecodeReplies(stock).size(), 1u);
+  EXPECT_EQ(DecodeReplies(stock)[0].dump.f_bracket, 10);
+  // ... with a damaged byte it does not; nor with another LEN (the 17-byte frame this driver
+  // once had, LEN 0x11, which no stock hand sends).
+  Bytes damaged = stock;
+  damaged[6] ^= 0x10;
+  EXPECT_TRUE(DecodeReplies(damaged).empty());
+  Bytes longer = {0xFF, 0x11, 0, 0, 200, 0, 10, 0, 0, 0, 20, 0x1F, 0x40, 0, 0, 1, 0, 7};
+  longer.push_back(Checksum(std::span<const std::uint8_t>(longer).subspan(1)));
+  EXPECT_TRUE(DecodeReplies(longer).empty());
 }
 
 TEST(SensorHandCodecDecoder, ResynchronisesAfterAFrameCutShort) {
@@ -308,8 +320,7 @@ Command RandomCommand(std::mt19937_64& rng) {
 }
 
 Reply RandomReply(std::mt19937_64& rng) {
-  std::uniform_int_distribution<int> kind(0, 5), speed(kSpeedMin, kSpeedMax), byte(0, 255),
-      opening(0, 10000), word(0, 65535);
+  std::uniform_int_distribution<int> kind(0, 5), speed(kSpeedMin, kSpeedMax), byte(0, 255);
   Reply r;
   switch (kind(rng)) {
     case 0:
@@ -330,10 +341,6 @@ Reply RandomReply(std::mt19937_64& rng) {
       d.f_bracket = static_cast<std::uint8_t>(byte(rng));
       d.f_pad = {static_cast<std::uint8_t>(byte(rng)), 0, 3};
       d.current = static_cast<std::uint8_t>(byte(rng));
-      d.opening = static_cast<std::uint16_t>(opening(rng));
-      d.speed = {static_cast<std::uint8_t>(speed(rng)), 0};
-      d.counter = static_cast<std::uint8_t>(byte(rng));
-      d.seq = static_cast<std::uint16_t>(word(rng));
       return r;
     }
   }

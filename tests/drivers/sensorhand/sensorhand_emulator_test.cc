@@ -1,5 +1,6 @@
-// The SensorHand emulator without a pty: its protocol (echoes, stream rate, strict frames) and
-// its mechanics (speeds, acceleration, range, object stiffness, stall force).
+// The SensorHand emulator without a pty: its protocol as a stock hand speaks it (echoes, the
+// published 9-byte stream frame and nothing more, stream rate, strict frames, the state byte)
+// and its mechanics (speeds, acceleration, range, object stiffness, stall force).
 
 #include "emulators/sensorhand_emulator.h"
 
@@ -75,12 +76,12 @@ TEST(SensorHandEmulator, StreamsEvery12Ms) {
   Rig rig;
   rig.Send(sensorhand::EncodeDumpStart());
   const auto frames = rig.Run(1.2);
-  // 1.2 s / 12 ms = 100 frames (the first at once), numbered 0, 1, 2, ...
+  // 1.2 s / 12 ms = 100 frames (the first at once), 12 bytes each and nothing between.
   EXPECT_NEAR(static_cast<double>(frames.size()), 100.0, 1.0);
+  EXPECT_EQ(rig.out.size(), frames.size() * sensorhand::kDumpFrameBytes);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     ASSERT_EQ(frames[i].kind, Reply::Kind::kDump);
-    EXPECT_EQ(frames[i].dump.seq, i);
-    EXPECT_EQ(frames[i].dump.opening, 8000);  // at rest at 0.08 m
+    EXPECT_EQ(frames[i].dump.state, static_cast<std::uint8_t>(sensorhand::MotionState::kIdle));
     EXPECT_NEAR(sensorhand::BatteryV(frames[i].dump.v_bat), 7.4, 0.05);
   }
   rig.Send(sensorhand::EncodeDumpStop());
@@ -159,6 +160,23 @@ TEST(SensorHandEmulator, GripSettlesAtTheStallForceOfTheCloseSpeed) {
   }
 }
 
+// Bug fix: a weaker close speed on a stronger grip used to move the fingers back out to the
+// weaker speed's stall opening at once (the grip "sprang back"); the gear does not back-drive,
+// so the grip holds where it is and the motor stalls.
+TEST(SensorHandEmulator, WeakerCloseOnAStrongerGripHolds) {
+  Rig rig(0.05);
+  rig.Send(sensorhand::EncodeSpeed({0, 0x85}));  // 100 N stall
+  rig.Run(1.0);
+  const double y = rig.hand->opening_m();
+  const double f = rig.hand->grip_force_n();
+  ASSERT_GT(f, 90.0);
+  rig.Send(sensorhand::EncodeSpeed({0, 0x3B}));  // 12.9 N stall
+  rig.Run(0.3);
+  EXPECT_NEAR(rig.hand->opening_m(), y, 1e-9);
+  EXPECT_NEAR(rig.hand->grip_force_n(), f, 1e-6);
+  EXPECT_EQ(rig.hand->velocity_m_s(), 0.0);
+}
+
 TEST(SensorHandEmulator, PowerCycleStopsTheStreamAndResetsCounters) {
   Rig rig;
   rig.Send(sensorhand::EncodeDumpStart());
@@ -171,8 +189,67 @@ TEST(SensorHandEmulator, PowerCycleStopsTheStreamAndResetsCounters) {
   rig.Send(sensorhand::EncodeDumpStart());
   const auto frames = rig.Run(0.05);
   ASSERT_FALSE(frames.empty());
-  EXPECT_EQ(frames[0].dump.seq, 0);
-  EXPECT_EQ(frames[0].dump.speed, sensorhand::kStop);
+  // Speed 0 after the reset: the fingers stand still, the state byte says idle.
+  EXPECT_EQ(rig.emu->speed(), sensorhand::kStop);
+  EXPECT_EQ(frames.back().dump.state, static_cast<std::uint8_t>(sensorhand::MotionState::kIdle));
+}
+
+// The stock frame, byte for byte: [FF][0A][9 data bytes][CS], the data as publish_dump() reads
+// them, and no trace of the finger position: the same forces and state at two openings give
+// the same bytes.
+TEST(SensorHandEmulator, SendsThePublishedFrameAndNothingMore) {
+  Rig rig;
+  rig.Send(sensorhand::EncodeDumpStart());
+  rig.Run(0.05);
+  const Bytes at_80mm(rig.out.end() - sensorhand::kDumpFrameBytes, rig.out.end());
+  sensorhand::DumpSample want;
+  want.v_bat = sensorhand::BatteryRaw(7.4);
+  want.state = static_cast<std::uint8_t>(sensorhand::MotionState::kIdle);
+  want.current = sensorhand::CurrentRaw(0.05);  // the electronics alone
+  EXPECT_EQ(at_80mm, sensorhand::EncodeDump(want));
+  EXPECT_EQ(at_80mm[1], 0x0A);
+  // Close to 30 mm, stop, let the fingers settle: the frame is the same.
+  rig.Send(sensorhand::EncodeSpeed({0, 0x85}));
+  rig.Run(0.16);
+  rig.Send(sensorhand::EncodeSpeed(sensorhand::kStop));
+  rig.Run(0.1);
+  EXPECT_LT(rig.hand->opening_m(), 0.05);
+  const Bytes at_30mm(rig.out.end() - sensorhand::kDumpFrameBytes, rig.out.end());
+  EXPECT_EQ(at_30mm, at_80mm);
+}
+
+// The state byte (values ours): opening or closing while a speed is set and the fingers move,
+// or have not been still for kBlockedAfterS; blocked after that; idle at speed 0 once still.
+TEST(SensorHandEmulator, StateByteTellsMotionBlockAndIdle) {
+  using sensorhand::MotionState;
+  Rig rig;
+  rig.Send(sensorhand::EncodeDumpStart());
+  rig.Run(0.03);
+  rig.Send(sensorhand::EncodeSpeed({0x85, 0}));  // 20 mm to the end stop: about 80 ms
+  std::vector<std::uint8_t> states;
+  double t_stop = -1.0, t_blocked = -1.0;
+  for (int i = 0; i < 100; ++i) {
+    const auto f = rig.Run(0.002);
+    if (t_stop < 0.0 && rig.hand->opening_m() >= 0.10) t_stop = rig.t;
+    for (const Reply& r : f) {
+      states.push_back(r.dump.state);
+      if (t_blocked < 0.0 && r.dump.state == static_cast<std::uint8_t>(MotionState::kBlocked)) {
+        t_blocked = rig.t;
+      }
+    }
+  }
+  ASSERT_FALSE(states.empty());
+  // Never blocked at the start, though the first sample after the command sees the fingers
+  // at rest.
+  EXPECT_EQ(states.front(), static_cast<std::uint8_t>(MotionState::kOpening));
+  ASSERT_GT(t_stop, 0.0);
+  ASSERT_GT(t_blocked, 0.0);
+  EXPECT_GE(t_blocked - t_stop, SensorHandEmulator::kBlockedAfterS - 1e-9);
+  EXPECT_LE(t_blocked - t_stop, SensorHandEmulator::kBlockedAfterS + sensorhand::kDumpPeriodS);
+  rig.Send(sensorhand::EncodeSpeed(sensorhand::kStop));
+  const auto after = rig.Run(0.05);
+  ASSERT_FALSE(after.empty());
+  EXPECT_EQ(after.back().dump.state, static_cast<std::uint8_t>(MotionState::kIdle));
 }
 
 TEST(SensorHandEmulator, FactoryDefaults) {
