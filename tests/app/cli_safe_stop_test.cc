@@ -21,6 +21,7 @@
 #include <thread>
 #include <variant>
 
+#include "emulators/biclops_emulator.h"
 #include "emulators/emulator.h"
 #include "emulators/laser_board_emulator.h"
 #include "emulators/val2_emulator.h"
@@ -225,6 +226,45 @@ TEST(CliSafeStop, SigtermDuringAnArmMoveLeavesTheRobotSafeAndSaysInterrupted) {
   EXPECT_EQ(report["safe_stop"]["laser"]["laser off"], "ok");  // the simulated laser
   EXPECT_EQ(report["safe_stop"]["laser"]["motor stop"], "ok");
   EXPECT_EQ(report["safe_stop"]["leds"]["left off"], "ok");
+  fs::remove_all(dir);
+}
+
+// The head's homing is a move too, and the one every start of a real robot makes: SIGTERM
+// while the Biclops sweeps for its home sensor, with every serial device on its emulator.
+TEST(CliSafeStop, SigtermDuringTheHeadsHomingLeavesEveryDeviceSafe) {
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_sigterm_homing";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  Emulators emu;
+  drivers::EmulatorHost head(drivers::MakeBiclopsEmulator(7));  // powered up away from home
+  const fs::path scenario =
+      Scenario(dir, "  arm_left: {driver: val2, port: " + emu.arm_left.port() +
+                        "}\n  arm_right: {driver: val2, port: " + emu.arm_right.port() +
+                        "}\n  head: {driver: biclops, port: " + head.port() +
+                        "}\n  laser: {driver: laser_board, port: " + emu.board.port() +
+                        "}\n  leds: {driver: laser_board, port: " + emu.board.port() + "}\n");
+  const auto chip_moving = [&] {
+    return head.With([](drivers::DeviceEmulator& d) {
+      const auto& chip = dynamic_cast<drivers::BiclopsEmulator&>(d).chip();
+      return chip.moving(0) || chip.moving(1) || chip.moving(2);
+    });
+  };
+  Child hgrasp("run " + scenario.string() + " --out " + (dir / "out").string(), dir / "log");
+  ASSERT_TRUE(hgrasp.started());
+  ASSERT_TRUE(WaitFor(chip_moving, 60)) << ReadFile(dir / "log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  ASSERT_TRUE(chip_moving());  // still sweeping
+  const double t_board = emu.board.Now();
+  hgrasp.Signal(SIGTERM);
+  EXPECT_EQ(hgrasp.Wait(10), 1) << ReadFile(dir / "log");
+  EXPECT_FALSE(chip_moving()) << "the head was not stopped";
+  EXPECT_TRUE(emu.BoardSafe(t_board)) << ReadFile(dir / "log");
+  EXPECT_TRUE(emu.Aborted(emu.arm_left, 0.0));
+  EXPECT_TRUE(emu.Aborted(emu.arm_right, 0.0));
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir / "out/report.json"));
+  EXPECT_EQ(report["failure"], "interrupted");
+  EXPECT_EQ(report["failure_detail"], "SIGTERM during the homing");
+  EXPECT_EQ(report["safe_stop"]["head"]["stop"], "ok");
   fs::remove_all(dir);
 }
 
