@@ -2,6 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <chrono>
+#include <thread>
+
 #include "app/output_dir.h"
 #include "biclops/biclops_head.h"
 #include "camera/gst_stereo_camera.h"
@@ -19,6 +22,9 @@ namespace {
 
 using device::Side;
 namespace cfg = drivers;
+
+// Below this grip force a hand holds nothing (N): DESIGN.md's grips are 10-100 N.
+constexpr double kHoldingForceN = 5.0;
 
 // "FILE:LINE" of a device's entry, for errors found when opening it.
 std::string Where(const sim::Scenario& s, const cfg::DeviceConfig& d) {
@@ -87,9 +93,34 @@ Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop) {
   robot.all_simulated = scenario.devices.AllSimulated();
   if (scenario.devices.AnySimulated()) robot.twin = std::make_unique<sim::SimRobot>(scenario);
   robot.devices = MakeDevices(scenario, robot.twin.get());
+  // A stock SensorHand measures no finger position: its driver integrates the commanded speeds
+  // from an assumed start. A real hand that holds nothing opens to its end stop, where the
+  // opening is known exactly; one that grips (a box held since the last run) keeps gripping.
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    const std::string key = "hand_" + std::string(device::ToString(side));
+    if (robot.start_failure || scenario.devices.Backend<cfg::SensorHandBackend>(key) == nullptr) {
+      continue;
+    }
+    auto& hand = dynamic_cast<drivers::SensorHandHand&>(*robot.devices.hand[static_cast<int>(side)]);
+    device::HandState state;
+    device::Status s = hand.Read(&state);
+    if (s == device::Status::kOk && state.grip_force_n < kHoldingForceN) {
+      spdlog::info("{}: opening to the end stop (the driver's opening estimate is exact there)", key);
+      s = hand.Home();
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+      while (s == device::Status::kOk && (s = hand.Read(&state)) == device::Status::kOk &&
+             state.moving && std::chrono::steady_clock::now() < until && !StopRequested(stop)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+    }
+    if (s != device::Status::kOk) {
+      robot.start_failure = StartFailure{key, s, key + ": " + std::string(device::ToString(s)) +
+                                                     " while opening to the end stop"};
+    }
+  }
   // A freshly powered Biclops does not know where its axes are (relative encoders).
   const auto* head_config = scenario.devices.Backend<cfg::BiclopsBackend>("head");
-  if (head_config != nullptr && head_config->options.home_at_start) {
+  if (!robot.start_failure && head_config != nullptr && head_config->options.home_at_start) {
     auto& head = dynamic_cast<drivers::BiclopsHead&>(*robot.devices.head);
     spdlog::info("head: homing the Biclops (configure, then tilt, verge, pan)");
     const device::Status s = head.ConfigureAndHome(stop);

@@ -339,16 +339,6 @@ bool GraspTask::Approach() {
   const grasp::GraspPlan& plan = *result_.plan;
   device::Arm& arm = dev_->ArmOf(plan.side);
   opening_m_ = plan.opening_m;
-  // Fully open first, at the hand's end stop: a hand that measures no finger position (the
-  // stock SensorHand: its driver integrates the commanded speeds) learns its opening there
-  // exactly, before it has to stop at the planned one.
-  if (!DeviceOk(dev_->HandOf(plan.side).Open(config_.grasp.hand.max_opening_m), HandKey(),
-                "open")) {
-    return false;
-  }
-  if (!WaitUntil([this](bool* still) { return HandStill(still); }, "hand open", false)) {
-    return false;
-  }
   if (!DeviceOk(dev_->HandOf(plan.side).Open(plan.opening_m), HandKey(), "open")) return false;
   // Above the pre-grasp first, then down to it: the hand comes onto the box from above.
   for (const device::Joint6* q : {&plan.q_via, &plan.q_pre}) {

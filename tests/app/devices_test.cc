@@ -89,6 +89,16 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
   EXPECT_TRUE(biclops->homed());
   EXPECT_FALSE(robot.start_failure.has_value());
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(TrueCounts(head, a), 0.0, 1.0) << "axis " << a;
+  // The stock SensorHand (no finger position on its wire), holding nothing, was opened to its
+  // end stop: the driver's estimate is exact there.
+  auto* sensorhand = dynamic_cast<drivers::SensorHandHand*>(dev.hand[1].get());
+  ASSERT_NE(sensorhand, nullptr);
+  EXPECT_TRUE(sensorhand->estimate().referenced);
+  const double true_opening = hand.With([](drivers::DeviceEmulator& d) {
+    return dynamic_cast<drivers::SensorHandEmulator&>(d).model().opening_m();
+  });
+  EXPECT_NEAR(true_opening, 0.10, 1e-3);
+  EXPECT_NEAR(sensorhand->estimate().opening_m, true_opening, 1e-3);
 
   // Which backend each device got.
   EXPECT_NE(dynamic_cast<drivers::Val2Arm*>(dev.arm[0].get()), nullptr);
