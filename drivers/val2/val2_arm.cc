@@ -224,7 +224,9 @@ Status Val2Arm::Stop() { return Command(val2::Encode(val2::AbortCommand()), true
 Status Val2Arm::SafeStop() {
   if (silent_since_) {
     // ^U empties the console's line of whatever a lost exchange left on it.
-    const std::string blind = "\x15" + val2::Encode(val2::AbortCommand()) + "\r";
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "\x15" + std::string.
+    std::string blind(1, '\x15');
+    blind.append(val2::Encode(val2::AbortCommand())).append("\r");
     const Status s = link_->Write(std::span<const std::uint8_t>(
         reinterpret_cast<const std::uint8_t*>(blind.data()), blind.size()));
     if (s == Status::kOk) ++counters_.blind_aborts;
