@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -399,6 +401,54 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& path_for
         e.mark.line < 0 ? path_for_errors : path_for_errors + ":" + std::to_string(e.mark.line + 1);
     throw InputError(where, "", e.msg, "a valid scenario file");
   }
+}
+
+std::string ScenarioYaml(const Scenario& s) {
+  if (!s.devices.entries.empty()) {
+    throw std::invalid_argument("ScenarioYaml: only a scenario whose devices are all simulated");
+  }
+  // The shortest text that reads back to the same double.
+  const auto num = [](double v) {
+    char buf[32];
+    const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, end);
+  };
+  const auto list = [&](std::initializer_list<double> v) {
+    std::string text = "[";
+    for (double x : v) text.append(text.size() > 1 ? ", " : "").append(num(x));
+    return text.append("]");
+  };
+  std::ostringstream y;
+  y << "name: " << s.name << "\n"
+    << "seed: " << s.seed << "\n"
+    << "camera_noise: " << num(s.camera_noise) << "\n"
+    << "lighting: {ambient: " << num(s.ambient) << "}\n";
+  if (s.wall_x) y << "wall: {x: " << num(*s.wall_x) << "}\n";
+  y << "objects:" << (s.objects.empty() ? " []\n" : "\n");
+  for (const ObjectSpec& o : s.objects) {
+    y << "  - name: " << o.name << "\n"
+      << "    shape: " << o.shape << "\n"
+      << "    size: " << list({o.size_O.x(), o.size_O.y(), o.size_O.z()}) << "\n"
+      << "    position: " << list({o.position_W.x(), o.position_W.y()}) << "\n"
+      << "    yaw_deg: " << num(RadToDeg(o.yaw)) << "\n"
+      << "    color: " << list({o.color_rgb.x(), o.color_rgb.y(), o.color_rgb.z()}) << "\n"
+      << "    mass: " << num(o.mass) << "\n"
+      << "    specular: " << (o.specular ? "true" : "false") << "\n";
+  }
+  if (!s.interference.empty()) y << "interference:\n";
+  for (const InterferenceSpec& i : s.interference) {
+    y << "  - origin: " << list({i.origin_W.x(), i.origin_W.y(), i.origin_W.z()}) << "\n"
+      << "    sweep_deg: " << list({RadToDeg(i.sweep_min), RadToDeg(i.sweep_max)}) << "\n"
+      << "    period_s: " << num(i.period_s) << "\n";
+  }
+  if (s.task) {
+    y << "task:\n  target: {"
+      << (s.task->target_name.empty() ? "color: " + s.task->target_color
+                                      : "name: " + s.task->target_name)
+      << "}\n  lift: " << num(s.task->lift_m) << "\n";
+  }
+  y << "devices: {}\n";
+  return y.str();
 }
 
 Scenario LoadScenario(const std::string& path) {

@@ -111,6 +111,13 @@ struct Scenario {
 /// unreadable, is not valid YAML, or holds a bad value.
 Scenario LoadScenario(const std::string& path);
 
+/// The scenario as YAML text that ParseScenario reads back to the same values (each number in the
+/// shortest text that reads back to the same double; angles in degrees as the schema has them,
+/// so they come back within 1e-12 rad): for `hgrasp generate`, which writes the scenes of a family for users to read and
+/// keep. Throws std::invalid_argument when a device is not simulated (the devices block is
+/// written only empty: generated scenes run on the twin).
+std::string ScenarioYaml(const Scenario& scenario);
+
 /// The corners of an object's footprint on the table, in W (x, y), counter-clockwise.
 std::array<Eigen::Vector2d, 4> ObjectFootprint(const ObjectSpec& o);
 

@@ -73,6 +73,21 @@ struct RunOptions {
 /// exit 1 when the task failed (the failure named in the report).
 int Run(const RunOptions& options);
 
+struct GenerateOptions {
+  std::string family = "random_boxes";  ///< a scene family (kSceneFamilies)
+  std::uint64_t first_seed = 1, last_seed = 1;  ///< the seed range, inclusive
+  std::string out_dir;
+};
+
+/// Scene families `hgrasp generate` draws from: random_boxes is sim::RandomBoxScene.
+inline constexpr const char* kSceneFamilies[] = {"random_boxes"};
+/// Most scenes one `hgrasp generate` writes.
+inline constexpr std::uint64_t kMaxGenerate = 100000;
+
+/// `hgrasp generate`: writes the scenario file of every seed of a family (DIR/<name>.yaml), so a
+/// user can read, keep and run them; all or none.
+int Generate(const GenerateOptions& options);
+
 struct EmulateOptions {
   std::string device;          ///< val2, biclops, sensorhand or laser_board
   std::string side = "right";  ///< val2: which arm's controller (its kinematics)

@@ -58,6 +58,23 @@ std::vector<std::int32_t> EncoderCounts(const std::vector<std::string>& text) {
   return counts;
 }
 
+// --seeds: "N" or "FIRST..LAST", non-negative integers.
+void SeedRange(const std::string& text, std::uint64_t* first, std::uint64_t* last) {
+  const auto number = [&](std::string_view s, std::uint64_t* v) {
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), *v);
+    return !s.empty() && ec == std::errc() && end == s.data() + s.size();
+  };
+  const std::size_t dots = text.find("..");
+  const bool ok = dots == std::string::npos
+                      ? number(text, first) && number(text, last)
+                      : number(std::string_view(text).substr(0, dots), first) &&
+                            number(std::string_view(text).substr(dots + 2), last);
+  if (!ok) {
+    throw hgrasp::InputError("", "--seeds", text,
+                             "a seed N or a range FIRST..LAST of non-negative integers, e.g. 1..20");
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -129,6 +146,16 @@ int main(int argc, char** argv) {
   cmd_run->add_flag(
       "--no-video", [&run](std::int64_t) { run.video = false; }, "do not write left.avi");
 
+  hgrasp::app::GenerateOptions generate;
+  std::string generate_seeds = "1";
+  CLI::App* cmd_generate = app.add_subcommand(
+      "generate",
+      "Write the scenario files of a scene family over a seed range (DIR/<name>.yaml), to read, "
+      "keep and run");
+  cmd_generate->add_option("--family", generate.family, "the scene family (random_boxes)");
+  cmd_generate->add_option("--seeds", generate_seeds, "the seeds: N or FIRST..LAST (default 1)");
+  cmd_generate->add_option("--out", generate.out_dir, "output directory")->required();
+
   hgrasp::app::EmulateOptions emulate;
   CLI::App* cmd_emulate = app.add_subcommand(
       "emulate",
@@ -165,6 +192,10 @@ int main(int argc, char** argv) {
     if (*cmd_model) return hgrasp::app::Model(model);
     if (*cmd_plan) return hgrasp::app::Plan(plan);
     if (*cmd_run) return hgrasp::app::Run(run);
+    if (*cmd_generate) {
+      SeedRange(generate_seeds, &generate.first_seed, &generate.last_seed);
+      return hgrasp::app::Generate(generate);
+    }
     if (*cmd_emulate) {
       if (emulate_seconds_option->count() > 0) emulate.seconds = emulate_seconds;
       return hgrasp::app::Emulate(emulate);
