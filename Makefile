@@ -21,7 +21,8 @@ PACKAGES := build-essential cmake pkg-config git \
 	libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
 	libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri \
 	libgtest-dev libgmock-dev libbenchmark-dev \
-	gstreamer1.0-plugins-base
+	gstreamer1.0-plugins-base \
+	slurm-wlm munge chromium python3-junitparser
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

@@ -24,4 +24,33 @@ BoxError CompareBox(const Pose3& X_WO_true, const Eigen::Vector3d& size_true, co
   return e;
 }
 
+std::vector<int> MatchBoxes(const std::vector<PlacedBox>& truth, const std::vector<PlacedBox>& fitted,
+                            double margin_m) {
+  const auto nearest_truth = [&](const Eigen::Vector3d& p_W) {
+    int best = -1;
+    double best_d = 1e300;
+    for (size_t i = 0; i < truth.size(); ++i) {
+      const double d = (truth[i].X_WO.translation() - p_W).norm();
+      if (d < best_d) best_d = d, best = static_cast<int>(i);
+    }
+    return best;
+  };
+  std::vector<int> match(truth.size(), -1);
+  for (size_t i = 0; i < truth.size(); ++i) {
+    int best = -1;
+    double best_d = 1e300;
+    for (size_t k = 0; k < fitted.size(); ++k) {
+      const double d = (fitted[k].X_WO.translation() - truth[i].X_WO.translation()).norm();
+      if (d < best_d) best_d = d, best = static_cast<int>(k);
+    }
+    if (best < 0) continue;
+    const Eigen::Vector3d p_O = truth[i].X_WO.inverse() * fitted[best].X_WO.translation();
+    const bool inside = (p_O.cwiseAbs().array() <= 0.5 * truth[i].size_O.array() + margin_m).all();
+    if (inside && nearest_truth(fitted[best].X_WO.translation()) == static_cast<int>(i)) {
+      match[i] = best;
+    }
+  }
+  return match;
+}
+
 }  // namespace hgrasp::sim

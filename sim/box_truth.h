@@ -3,6 +3,7 @@
 /// (never read by the pipeline).
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "common/geometry.h"
 
@@ -24,5 +25,18 @@ struct BoxError {
 /// Compares a fitted box (X_WO_fit, full edges size_fit) with the true box (X_WO_true, size_true).
 BoxError CompareBox(const Pose3& X_WO_true, const Eigen::Vector3d& size_true, const Pose3& X_WO_fit,
                     const Eigen::Vector3d& size_fit);
+
+/// A box: its centre pose in W and full edge lengths (m).
+struct PlacedBox {
+  Pose3 X_WO;
+  Eigen::Vector3d size_O;
+};
+
+/// Which fitted box models each true box: per true box, the index of the fitted box whose centre
+/// lies nearest to the true centre, kept when that centre lies inside the true box grown by
+/// margin_m on every side and no other true box's centre is nearer to it; -1 (missed) otherwise.
+/// A fitted box models at most one true box.
+std::vector<int> MatchBoxes(const std::vector<PlacedBox>& truth, const std::vector<PlacedBox>& fitted,
+                            double margin_m = 0.01);
 
 }  // namespace hgrasp::sim

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hgrasp::app {
@@ -49,6 +50,9 @@ struct ModelOptions {
   std::string scenario;
   std::string out_dir;
   CalibrationFiles files;
+  /// Only report.json and the pictures a sweep's page shows (segments.png, models.png or
+  /// grasp.png); no range.ply, range.png or models.obj.
+  bool lean = false;
 };
 
 /// `hgrasp model`: a scan, its planar segmentation and the boxes fitted to it: range.ply,
@@ -65,6 +69,8 @@ struct RunOptions {
   std::string out_dir;
   CalibrationFiles files;
   bool video = true;  ///< write left.avi, the left camera through the whole run
+  /// As ModelOptions::lean (and no left.avi): report.json, segments.png, grasp.png, servo_*.png.
+  bool lean = false;
 };
 
 /// `hgrasp run`: the whole task (look, plan, approach, servo, close, lift): the outputs of
@@ -84,9 +90,57 @@ inline constexpr const char* kSceneFamilies[] = {"random_boxes"};
 /// Most scenes one `hgrasp generate` writes.
 inline constexpr std::uint64_t kMaxGenerate = 100000;
 
+/// Checks a family name and seed range (`--family`, `--seeds`).
+/// @throws hgrasp::InputError naming the option.
+void CheckFamily(const std::string& family, std::uint64_t first_seed, std::uint64_t last_seed);
+/// The scenario file of one scene of a (checked) family: its YAML into *yaml; returns its name.
+std::string FamilyScene(const std::string& family, std::uint64_t seed, std::string* yaml);
+
 /// `hgrasp generate`: writes the scenario file of every seed of a family (DIR/<name>.yaml), so a
 /// user can read, keep and run them; all or none.
 int Generate(const GenerateOptions& options);
+
+struct SweepOptions {
+  /// Scenario files, and folders whose *.yaml files are taken (sorted by name).
+  std::vector<std::string> inputs;
+  /// Generated scenes: a family (kSceneFamilies) over a seed range, written to DIR/scenarios/.
+  std::string family;
+  std::optional<std::pair<std::uint64_t, std::uint64_t>> seeds;
+  std::string stage = "run";  ///< scan, model, plan or run
+  std::string out_dir;
+  int jobs = 1;                ///< scene processes at once
+  double time_limit_s = 300;   ///< a scene's process is killed after this long (s)
+  CalibrationFiles files;
+  std::string baseline;        ///< compare with this baseline; regressions exit 1
+  std::string write_baseline;  ///< write the sweep's baseline here
+  std::string hgrasp;          ///< the program each scene runs with (default: this hgrasp)
+  /// This process runs shard index/count of the sweep in out_dir (a Slurm array task): its
+  /// scenes only, no summary (`hgrasp sweep merge` writes it).
+  std::optional<std::pair<int, int>> shard;
+  bool slurm = false;          ///< submit a job array instead of running here
+  int shards = 0;              ///< array tasks (0: min(scenes, kDefaultShards))
+  bool slurm_wait = false;     ///< wait for the array to end (squeue), then merge
+  std::vector<std::string> sbatch_args;  ///< more sbatch options (partition, account, ...)
+};
+
+/// Array tasks of a Slurm sweep when --shards is not given: at most this many.
+inline constexpr int kDefaultShards = 64;
+/// Most scene processes at once (--jobs).
+inline constexpr int kMaxJobs = 256;
+
+/// `hgrasp sweep`: runs each scene in its own process up to `stage`, scores it against the
+/// simulator's truth, and writes summary.json, summary.csv, junit.xml and report.html in
+/// out_dir (README, "hgrasp sweep"). Resumes a stopped sweep in the same folder. Exit 0 when
+/// every scene has its row and no baseline figure regressed; 1 when stopped or regressed.
+int Sweep(const SweepOptions& options);
+
+struct SweepMergeOptions {
+  std::string dir;
+  std::string baseline, write_baseline;
+};
+
+/// `hgrasp sweep merge DIR`: the outputs of a sweep whose scenes ran elsewhere (Slurm shards).
+int SweepMerge(const SweepMergeOptions& options);
 
 struct EmulateOptions {
   std::string device;          ///< val2, biclops, sensorhand or laser_board

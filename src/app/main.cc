@@ -26,6 +26,11 @@ std::string UnknownCommand(const CLI::App& app, int argc, char** argv) {
     if (word.empty() || word[0] == '-') return "";  // an option (--help, ...): CLI11's
     const std::vector<const CLI::App*> subs = level->get_subcommands({});
     if (subs.empty()) return "";
+    // A command with both subcommands and positional arguments (sweep: merge, or scenario
+    // files): the word may be an argument, CLI11's to judge.
+    const std::vector<const CLI::Option*> positionals =
+        level->get_options([](const CLI::Option* o) { return o->get_positional(); });
+    if (!positionals.empty() && level != &app) return "";
     const CLI::App* next = nullptr;
     std::string names;
     for (const CLI::App* sub : subs) {
@@ -132,10 +137,16 @@ int main(int argc, char** argv) {
       "segments.png, models.png, models.obj, report.json",
       &model.scenario, &model.out_dir, &model.files);
 
+  cmd_model->add_flag("--lean", model.lean,
+                      "only report.json, segments.png and models.png (as a sweep's scenes)");
+
   hgrasp::app::ModelOptions plan;
   CLI::App* cmd_plan = scene_command(
       "plan", "As `model`, then the grasp of the target: grasp.png, the grasp in report.json",
       &plan.scenario, &plan.out_dir, &plan.files);
+
+  cmd_plan->add_flag("--lean", plan.lean,
+                     "only report.json, segments.png and grasp.png (as a sweep's scenes)");
 
   hgrasp::app::RunOptions run;
   CLI::App* cmd_run = scene_command(
@@ -145,6 +156,9 @@ int main(int argc, char** argv) {
       &run.scenario, &run.out_dir, &run.files);
   cmd_run->add_flag(
       "--no-video", [&run](std::int64_t) { run.video = false; }, "do not write left.avi");
+  cmd_run->add_flag("--lean", run.lean,
+                    "only report.json, segments.png, grasp.png and servo_*.png (as a sweep's "
+                    "scenes; no video)");
 
   hgrasp::app::GenerateOptions generate;
   std::string generate_seeds = "1";
@@ -155,6 +169,51 @@ int main(int argc, char** argv) {
   cmd_generate->add_option("--family", generate.family, "the scene family (random_boxes)");
   cmd_generate->add_option("--seeds", generate_seeds, "the seeds: N or FIRST..LAST (default 1)");
   cmd_generate->add_option("--out", generate.out_dir, "output directory")->required();
+
+  hgrasp::app::SweepOptions sweep;
+  std::string sweep_seeds, sweep_shard;
+  CLI::App* cmd_sweep = app.add_subcommand(
+      "sweep",
+      "Many scenes, each in its own process, scored against the simulator's truth: "
+      "summary.json, summary.csv, junit.xml, report.html; baselines; resumes; Slurm");
+  cmd_sweep->add_option("scenarios", sweep.inputs, "scenario files, or folders of them");
+  CLI::Option* sweep_family = cmd_sweep->add_option(
+      "--family", sweep.family, "generated scenes of this family (random_boxes) with --seeds");
+  cmd_sweep->add_option("--seeds", sweep_seeds, "the generated scenes' seeds: N or FIRST..LAST");
+  cmd_sweep->add_option("--stage", sweep.stage, "scan, model, plan or run (default run)");
+  CLI::Option* sweep_out = cmd_sweep->add_option("--out", sweep.out_dir, "the sweep's folder");
+  cmd_sweep->add_option("--jobs", sweep.jobs, "scene processes at once (default 1)");
+  cmd_sweep->add_option("--time-limit", sweep.time_limit_s,
+                        "seconds a scene may take before it is killed (default 300)");
+  cmd_sweep->add_option("--cameras", sweep.files.cameras, "camera intrinsics YAML");
+  cmd_sweep->add_option("--laser", sweep.files.laser, "laser calibration YAML");
+  cmd_sweep->add_option("--leds", sweep.files.leds, "LED positions on the grippers YAML");
+  cmd_sweep->add_option("--baseline", sweep.baseline,
+                        "compare with this baseline; a regression exits 1");
+  cmd_sweep->add_option("--write-baseline", sweep.write_baseline,
+                        "write this sweep's figures as a baseline");
+  cmd_sweep->add_option("--hgrasp", sweep.hgrasp,
+                        "the program the scenes run with (default: this hgrasp; e.g. another "
+                        "build, or a wrapper)");
+  cmd_sweep->add_flag("--slurm", sweep.slurm,
+                      "submit the scenes as a Slurm job array (results in --out, which must be "
+                      "shared), instead of running them here");
+  cmd_sweep->add_option("--shards", sweep.shards,
+                        "--slurm: array tasks (default: the scenes, at most 64)");
+  cmd_sweep->add_flag("--slurm-wait", sweep.slurm_wait,
+                      "--slurm: wait for the array to end, then merge");
+  cmd_sweep->add_option("--sbatch-arg", sweep.sbatch_args,
+                        "--slurm: an sbatch option (repeat for more), e.g. --sbatch-arg=-p "
+                        "--sbatch-arg=gpu");
+  cmd_sweep->add_option("--shard", sweep_shard,
+                        "INDEX/COUNT: run that shard of the sweep in --out (a Slurm array task)");
+  hgrasp::app::SweepMergeOptions sweep_merge;
+  CLI::App* cmd_sweep_merge = cmd_sweep->add_subcommand(
+      "merge", "The summary, pages and baseline of a sweep whose scenes ran elsewhere (Slurm)");
+  cmd_sweep_merge->add_option("dir", sweep_merge.dir, "the sweep's folder")->required();
+  cmd_sweep_merge->add_option("--baseline", sweep_merge.baseline, "compare with this baseline");
+  cmd_sweep_merge->add_option("--write-baseline", sweep_merge.write_baseline,
+                              "write the figures as a baseline");
 
   hgrasp::app::EmulateOptions emulate;
   CLI::App* cmd_emulate = app.add_subcommand(
@@ -195,6 +254,34 @@ int main(int argc, char** argv) {
     if (*cmd_generate) {
       SeedRange(generate_seeds, &generate.first_seed, &generate.last_seed);
       return hgrasp::app::Generate(generate);
+    }
+    if (*cmd_sweep_merge) return hgrasp::app::SweepMerge(sweep_merge);
+    if (*cmd_sweep) {
+      if (sweep_out->count() == 0) {
+        throw hgrasp::InputError("", "--out", "", "the sweep's folder (--out DIR)");
+      }
+      if (!sweep_seeds.empty()) {
+        std::uint64_t first = 0, last = 0;
+        SeedRange(sweep_seeds, &first, &last);
+        sweep.seeds = {first, last};
+      } else if (sweep_family->count() > 0) {
+        throw hgrasp::InputError("", "--seeds", "", "the seeds of the --family's scenes");
+      }
+      if (!sweep_shard.empty()) {
+        const size_t slash = sweep_shard.find('/');
+        std::uint64_t index = 0, count = 0;
+        const auto number = [](std::string_view t, std::uint64_t* v) {
+          const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), *v);
+          return !t.empty() && ec == std::errc() && end == t.data() + t.size() && *v < 1000000;
+        };
+        if (slash == std::string::npos ||
+            !number(std::string_view(sweep_shard).substr(0, slash), &index) ||
+            !number(std::string_view(sweep_shard).substr(slash + 1), &count)) {
+          throw hgrasp::InputError("", "--shard", sweep_shard, "INDEX/COUNT, e.g. 3/16");
+        }
+        sweep.shard = {static_cast<int>(index), static_cast<int>(count)};
+      }
+      return hgrasp::app::Sweep(sweep);
     }
     if (*cmd_emulate) {
       if (emulate_seconds_option->count() > 0) emulate.seconds = emulate_seconds;

@@ -30,6 +30,8 @@
 #include "scan/scanner.h"
 #include "segment/segment.h"
 #include "sim/box_truth.h"
+#include "sim/hoover.h"
+#include "sim/scan_truth.h"
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
 #include "sim/truth.h"
@@ -51,12 +53,122 @@ nlohmann::json Mat(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-nlohmann::json LookReport(const sim::Scenario& scenario, sim::SimRobot* robot,
+void RecordScanTruth(sim::SimRobot* robot, sim::ScanTruth* truth,
+                     const device::StereoFrame& frame, const task::TaskView& view) {
+  if (robot == nullptr || view.stage != "look" || !view.moment.empty() || !frame.laser_on) return;
+  truth->AddFrame(robot->rig(), frame.laser_encoder_count);
+}
+
+nlohmann::json LookTruth(sim::SimRobot& robot, const task::TaskResult& r,
+                         const sim::ScanTruth& scan_truth) {
+  const sim::World& world = robot.world();
+  nlohmann::json truth = sim::TruthJson(world, robot.rig(), {});
+  if (!r.scan || !r.scene) return truth;  // the scan ended early (a device failed)
+  const scan::RangeImage& range = r.scan->range;
+  const model::SceneModel& scene = *r.scene;
+  const std::vector<model::BoxModel>& boxes = scene.boxes;
+
+  // The range against the true surfaces and the stripe both cameras truly saw.
+  std::vector<sim::ScanTruth::Point> points;
+  std::vector<Eigen::Vector3d> p_W;
+  std::vector<int> machine;
+  for (int row = 0; row < range.rows(); ++row) {
+    for (int col = 0; col < range.cols(); ++col) {
+      const scan::RangeCell& cell = range.at(row, col);
+      if (!cell.valid) continue;
+      const std::int32_t count =
+          range.encoder_counts.empty() ? col : range.encoder_counts[static_cast<size_t>(col)];
+      points.push_back({count, cell.p_W});
+      p_W.push_back(cell.p_W);
+      machine.push_back(scene.segments.labels[static_cast<size_t>(row * range.cols() + col)]);
+    }
+  }
+  const sim::ScanTruthFigures f = scan_truth.Score(world, points, range.encoder_counts);
+  truth["range"] = {{"points", f.points},
+                    {"rms_to_surface_m", f.rms_m},
+                    {"median_to_surface_m", f.median_m},
+                    {"p99_to_surface_m", f.p99_m},
+                    {"outliers", f.outliers},
+                    {"outlier_fraction", f.outlier_fraction()},
+                    {"outlier_distance_m", sim::kOutlierDistanceM},
+                    {"truth_stripe_points", f.truth_points},
+                    {"covered", f.covered},
+                    {"coverage", f.coverage()}};
+  spdlog::info(
+      "  range: RMS {:.3f} mm to the true surfaces, {} of {} points beyond {:.0f} mm, coverage "
+      "{:.1f}% of {} true stripe points",
+      1e3 * f.rms_m, f.outliers, f.points, 1e3 * sim::kOutlierDistanceM, 100 * f.coverage(),
+      f.truth_points);
+
+  // The segmentation against the faces the left camera truly sees (the head has not moved since
+  // the scan), after Hoover et al.
+  const std::vector<int> faces = sim::TrueFaceLabels(world, &robot.rig(), sim::kLeft, p_W);
+  const sim::HooverCounts h = sim::CompareSegmentations(faces, machine, kHooverMinCells);
+  truth["hoover"] = {{"truth_regions", h.truth_regions}, {"correct", h.correct},
+                     {"over", h.over},                   {"under", h.under},
+                     {"missed", h.missed},               {"noise", h.noise},
+                     {"min_cells", kHooverMinCells}};
+
+  // Each true object against the fitted box that models it (sim::MatchBoxes).
+  std::vector<sim::PlacedBox> true_boxes, fitted;
+  for (const sim::SimObject& obj : world.objects()) {
+    true_boxes.push_back({world.BodyPose(obj.body), obj.spec.size_O});
+  }
+  for (const model::BoxModel& b : boxes) fitted.push_back({b.X_WO, b.size_O});
+  const std::vector<int> match = sim::MatchBoxes(true_boxes, fitted);
+  nlohmann::json matches = nlohmann::json::array();
+  for (size_t i = 0; i < world.objects().size(); ++i) {
+    const sim::SimObject& obj = world.objects()[i];
+    const std::string true_colour(sim::NearestPaletteName(obj.spec.color_rgb));
+    const int k = match[i];
+    nlohmann::json m = {{"object", obj.spec.name},
+                        {"box", k < 0 ? nlohmann::json(nullptr) : nlohmann::json(k)},
+                        {"found", k >= 0},
+                        {"true_color_name", true_colour}};
+    if (k >= 0) {
+      const sim::BoxError e =
+          sim::CompareBox(true_boxes[i].X_WO, obj.spec.size_O, boxes[k].X_WO, boxes[k].size_O);
+      const std::string colour(scene.colours[k].name());
+      m["center_error_m"] = e.center_m;
+      m["edge_error_m"] = Vec(e.edge_m);
+      m["max_edge_error_m"] = e.max_edge_m;
+      m["yaw_error_deg"] = RadToDeg(e.yaw_rad);
+      m["color_name"] = colour;
+      m["color_ok"] = colour == true_colour;
+      spdlog::info(
+          "  {}: box {} ({}) centre {:.1f} mm, edges {:.1f} {:.1f} {:.1f} mm, yaw {:.2f} deg", obj.spec.name,
+          k, colour, 1e3 * e.center_m, 1e3 * e.edge_m.x(), 1e3 * e.edge_m.y(),
+          1e3 * e.edge_m.z(), RadToDeg(e.yaw_rad));
+    } else {
+      spdlog::info("  {}: no box", obj.spec.name);
+    }
+    matches.push_back(m);
+  }
+  truth["boxes"] = matches;
+  if (r.plan && r.target) {
+    // How far each contact lies from the true surface of the object the target box models.
+    const sim::SimObject* object = TargetObject(world, boxes[*r.target]);
+    if (object != nullptr) {
+      const Pose3 X_WO = world.BodyPose(object->body);
+      nlohmann::json d = nlohmann::json::array();
+      for (const Eigen::Vector3d& c : r.plan->contacts_W) {
+        d.push_back(sim::DistanceToBoxSurface(X_WO, object->spec.size_O, c));
+      }
+      truth["grasp"] = {{"object", object->spec.name}, {"contact_to_surface_m", d}};
+      spdlog::info("  grasp of {}: contacts {:.1f} and {:.1f} mm from its true faces",
+                   object->spec.name, 1e3 * d[0].get<double>(), 1e3 * d[1].get<double>());
+    }
+  }
+  return truth;
+}
+
+nlohmann::json LookReport(const sim::Scenario& scenario, const nlohmann::json* truth,
                           const task::TaskResult& r, const task::RobotModel& robot_model, bool plan,
-                          const std::string& out_dir) {
+                          const std::string& out_dir, bool lean) {
   nlohmann::json report;
   report["scenario"] = scenario.name;
   report["seed"] = scenario.seed;
+  if (truth != nullptr) report["truth"] = *truth;
   if (!r.scan || !r.scene) return report;  // the scan ended early (a device failed)
   const scan::ScanResult& scan = *r.scan;
   const model::SceneModel& scene = *r.scene;
@@ -102,57 +214,11 @@ nlohmann::json LookReport(const sim::Scenario& scenario, sim::SimRobot* robot,
     }
   }
 
-  // Ground truth (only where the devices are the simulator's): each true object against the
-  // fitted box nearest to it.
-  if (robot != nullptr) {
-    nlohmann::json truth = sim::TruthJson(robot->world(), robot->rig(), {});
-    nlohmann::json matches = nlohmann::json::array();
-    for (const sim::SimObject& obj : robot->world().objects()) {
-      const Pose3 X_WO = robot->world().BodyPose(obj.body);
-      int best = -1;
-      double best_d = 1e9;
-      for (size_t k = 0; k < boxes.size(); ++k) {
-        const double d = (boxes[k].X_WO.translation() - X_WO.translation()).norm();
-        if (d < best_d) best_d = d, best = static_cast<int>(k);
-      }
-      nlohmann::json m = {{"object", obj.spec.name},
-                          {"box", best < 0 ? nlohmann::json(nullptr) : nlohmann::json(best)}};
-      if (best >= 0) {
-        const sim::BoxError e =
-            sim::CompareBox(X_WO, obj.spec.size_O, boxes[best].X_WO, boxes[best].size_O);
-        m["center_error_m"] = e.center_m;
-        m["edge_error_m"] = Vec(e.edge_m);
-        m["yaw_error_deg"] = RadToDeg(e.yaw_rad);
-        spdlog::info(
-            "  {}: box {} ({}) centre {:.1f} mm, edges {:.1f} {:.1f} {:.1f} mm, yaw {:.2f} deg",
-            obj.spec.name, best, colours[best].name(), 1e3 * e.center_m, 1e3 * e.edge_m.x(),
-            1e3 * e.edge_m.y(), 1e3 * e.edge_m.z(), RadToDeg(e.yaw_rad));
-      } else {
-        spdlog::info("  {}: no box", obj.spec.name);
-      }
-      matches.push_back(m);
-    }
-    truth["boxes"] = matches;
-    if (grasp_plan) {
-      // How far each contact lies from the true surface of the object the target box models.
-      const sim::SimObject* object = TargetObject(robot->world(), boxes[*target]);
-      if (object != nullptr) {
-        const Pose3 X_WO = robot->world().BodyPose(object->body);
-        nlohmann::json d = nlohmann::json::array();
-        for (const Eigen::Vector3d& c : grasp_plan->contacts_W) {
-          d.push_back(sim::DistanceToBoxSurface(X_WO, object->spec.size_O, c));
-        }
-        truth["grasp"] = {{"object", object->spec.name}, {"contact_to_surface_m", d}};
-        spdlog::info("  grasp of {}: contacts {:.1f} and {:.1f} mm from its true faces",
-                     object->spec.name, 1e3 * d[0].get<double>(), 1e3 * d[1].get<double>());
-      }
-    }
-    report["truth"] = truth;
-  }
-
   const fs::path out(out_dir);
-  scan::WritePly(scan.range, (out / "range.ply").string());
-  scan::WriteRangePng(scan.range, (out / "range.png").string());
+  if (!lean) {
+    scan::WritePly(scan.range, (out / "range.ply").string());
+    scan::WriteRangePng(scan.range, (out / "range.png").string());
+  }
   const PinholeCamera camera = robot_model.cameras.left;
   WritePng(SegmentsPicture(scene.segments, scene.groups, scan.range, camera),
            (out / "segments.png").string());
@@ -169,7 +235,7 @@ nlohmann::json LookReport(const sim::Scenario& scenario, sim::SimRobot* robot,
   const Pose3 X_CW = robot_model.head.X_WC(0, r.scan_head).inverse();
   cv::Mat models = ModelsPicture(scan.ambient_left, camera, X_CW, boxes, scene.textures,
                                  colours_bgr, labels, target.value_or(-1));
-  WritePng(models, (out / "models.png").string());
+  if (!lean || !plan) WritePng(models, (out / "models.png").string());
   if (plan) {
     if (grasp_plan) {
       DrawHand(&models, camera, X_CW, grasp::HandBoxes(grasp_plan->X_WE, grasp_plan->opening_m, {}),
@@ -177,7 +243,7 @@ nlohmann::json LookReport(const sim::Scenario& scenario, sim::SimRobot* robot,
     }
     WritePng(models, (out / "grasp.png").string());
   }
-  model::WriteObj(boxes, scene.textures, colours_rgb, out.string());
+  if (!lean) model::WriteObj(boxes, scene.textures, colours_rgb, out.string());
   spdlog::info(
       "model: {} points, {} regions, {} objects, {} boxes ({} not fitted), target {}; scan "
       "{:.2f} s, segment + model {:.1f} ms",
@@ -235,12 +301,18 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   Robot robot = OpenRobot(scenario, signals.request());
   if (EndedAtStart(robot, scenario, &out, plan ? "plan" : "model")) return 1;
   device::RobotDevices& dev = robot.devices;
-  task::GraspTask task(&dev, robot_model, config);
+  sim::ScanTruth scan_truth;
+  task::GraspTask task(&dev, robot_model, config,
+                       [&](const device::StereoFrame& frame, const task::TaskView& view) {
+                         RecordScanTruth(robot.truth(), &scan_truth, frame, view);
+                       });
   const bool ok = task.Look() && (!plan || task.Plan());
-  const SafeStopReport safe = robot.LeaveSafe();
   const task::TaskResult& r = task.result();
-  nlohmann::json report =
-      LookReport(scenario, robot.truth(), r, robot_model, plan, out.staging());
+  std::optional<nlohmann::json> truth;
+  if (robot.truth() != nullptr) truth = LookTruth(*robot.truth(), r, scan_truth);
+  const SafeStopReport safe = robot.LeaveSafe();
+  nlohmann::json report = LookReport(scenario, truth ? &*truth : nullptr, r, robot_model, plan,
+                                     out.staging(), o.lean);
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);

@@ -80,7 +80,7 @@ int Run(const RunOptions& o) {
   const fs::path out(out_dir.staging());
 
   cv::VideoWriter video;
-  if (o.video) {
+  if (o.video && !o.lean) {
     // Motion JPEG in AVI: OpenCV's own encoder, no codec library needed.
     const cv::Size size(kPictureScale * 320, kPictureScale * 240);
     if (!video.open((out / "left.avi").string(), cv::CAP_OPENCV_MJPEG,
@@ -113,24 +113,33 @@ int Run(const RunOptions& o) {
                                              {"gripper_to_plan_deg", RadToDeg(e.rotation_rad)}};
     }
   };
-  task::GraspTask task(&dev, robot_model, config, sink);
+  sim::ScanTruth scan_truth;
+  task::GraspTask task(&dev, robot_model, config,
+                       [&](const device::StereoFrame& frame, const task::TaskView& view) {
+                         RecordScanTruth(truth, &scan_truth, frame, view);
+                         sink(frame, view);
+                       });
   task_ptr = &task;
-  // The target object's true height before anything touches it (truth only).
+  // The truth of the look and the plan is taken before anything touches the objects, and so is
+  // the target object's true height (truth only).
+  std::optional<nlohmann::json> look_truth;
   std::optional<double> z0;
-  const bool ok = task.Look() && [&] {
-    if (sim_truth && task.result().target) {
+  const bool planned = task.Look() && task.Plan();
+  if (sim_truth) {
+    look_truth = LookTruth(*truth, task.result(), scan_truth);
+    if (task.result().target) {
       const sim::SimObject* object =
           TargetObject(truth->world(), task.result().scene->boxes[*task.result().target]);
       if (object != nullptr) z0 = truth->world().BodyPose(object->body).translation().z();
     }
-    return task.Plan() && task.Approach() && task.Servo() && task.Close() && task.Lift();
-  }();
+  }
+  const bool ok = planned && task.Approach() && task.Servo() && task.Close() && task.Lift();
   // Whatever happened, the robot is left safe before anything is written (DESIGN.md rule 8).
   const SafeStopReport safe = robot.LeaveSafe();
   const task::TaskResult& r = task.result();
 
-  nlohmann::json report =
-      LookReport(scenario, truth, r, robot_model, true, out_dir.staging());
+  nlohmann::json report = LookReport(scenario, look_truth ? &*look_truth : nullptr, r,
+                                     robot_model, true, out_dir.staging(), o.lean);
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
