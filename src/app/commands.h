@@ -41,6 +41,7 @@ struct ScanOptions {
   std::string out_dir;
   CalibrationFiles files;
   bool single_camera = false;  ///< light-plane triangulation from the left camera only
+  bool lean = false;           ///< only report.json (a sweep's scene): no range.ply, range.png
 };
 
 /// `hgrasp scan`: one laser sweep: range.ply, range.png and report.json.

@@ -129,6 +129,7 @@ int main(int argc, char** argv) {
   cmd_scan->add_flag("--single-camera", scan.single_camera,
                      "light-plane triangulation from the left camera alone, no stereo validation "
                      "(for comparison)");
+  cmd_scan->add_flag("--lean", scan.lean, "only report.json (as a sweep's scenes)");
 
   hgrasp::app::ModelOptions model;
   CLI::App* cmd_model = scene_command(

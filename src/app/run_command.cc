@@ -147,6 +147,7 @@ int Run(const RunOptions& o) {
       r.failed_device.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.failed_device);
   report["safe_stop"] = safe.Json();
   report["result"] = {{"lifted", r.lifted}, {"lift_height", r.lift_height_m}};
+  report["task"] = {{"lift", config.lift_m}, {"hold_s", config.hold_s}};
   nlohmann::json phases = nlohmann::json::array();
   for (const task::ServoPhase& p : r.servo) {
     phases.push_back({{"phase", p.name},

@@ -206,8 +206,10 @@ int Scan(const ScanOptions& o) {
         1e3 * rms, 1e3 * percentile(0.5), 1e3 * percentile(0.99), beyond_5mm);
   }
 
-  scan::WritePly(result.range, out.Path("range.ply"));
-  scan::WriteRangePng(result.range, out.Path("range.png"));
+  if (!o.lean) {
+    scan::WritePly(result.range, out.Path("range.ply"));
+    scan::WriteRangePng(result.range, out.Path("range.png"));
+  }
   WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
   out.Commit();
   spdlog::info("scan: {} points, {} rejected rows{}; scan {:.2f} s, total {:.2f} s; wrote {}",

@@ -107,7 +107,9 @@ void AddFigures(const json& report, const std::string& stage, json* row) {
     }
     const json rise = Number(run, "/object_rise_m", 1e3);
     const json lifted = report.value("/result/lifted"_json_pointer, json(false));
-    r["lift"] = {{"lifted", lifted}, {"true_rise_mm", rise}};
+    r["lift"] = {{"lifted", lifted},
+                 {"true_rise_mm", rise},
+                 {"task_lift_mm", Number(report, "/task/lift", 1e3)}};
   }
 }
 

@@ -126,11 +126,15 @@ json Totals(const std::vector<json>& rows) {
     }
     wall += row.value("wall_s", 0.0);
   }
-  // A true lift: the box rose at least kTrueLiftFraction of the 5 cm lift the scenes ask for;
+  // A true lift: the box rose at least kTrueLiftFraction of the lift the task asked for;
   // counted from the rise (truth), whatever the task said.
   for (const json& row : rows) {
     const json rise = Get(row, "/lift/true_rise_mm");
-    if (rise.is_number() && rise.get<double>() >= kTrueLiftFraction * 50.0) ++truly_lifted;
+    const json asked = Get(row, "/lift/task_lift_mm");
+    if (rise.is_number() && asked.is_number() &&
+        rise.get<double>() >= kTrueLiftFraction * asked.get<double>()) {
+      ++truly_lifted;
+    }
   }
   t["ok"] = ok;
   t["failed"] = static_cast<int>(rows.size()) - ok;

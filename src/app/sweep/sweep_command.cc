@@ -240,7 +240,7 @@ std::vector<std::string> SceneCommand(const json& manifest, const SceneEntry& s,
   const std::string stage = manifest["stage"];
   std::vector<std::string> argv = {manifest["hgrasp"].get<std::string>(), stage, s.file, "--out",
                                    scene_dir.string()};
-  if (stage != "scan") argv.push_back("--lean");
+  argv.push_back("--lean");
   const json& cal = manifest["calibration"];
   const CalibrationFiles defaults;
   const auto pass = [&](const char* key, const char* option, const std::string& fallback) {
