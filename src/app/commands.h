@@ -118,6 +118,9 @@ struct SweepOptions {
   /// This process runs shard index/count of the sweep in out_dir (a Slurm array task): its
   /// scenes only, no summary (`hgrasp sweep merge` writes it).
   std::optional<std::pair<int, int>> shard;
+  /// Write the manifest and the generated scenario files, run nothing (the shards then run by
+  /// --shard on other machines, e.g. through GNU parallel).
+  bool prepare = false;
   bool slurm = false;          ///< submit a job array instead of running here
   int shards = 0;              ///< array tasks (0: min(scenes, kDefaultShards))
   bool slurm_wait = false;     ///< wait for the array to end (squeue), then merge

@@ -196,6 +196,9 @@ int main(int argc, char** argv) {
   cmd_sweep->add_option("--hgrasp", sweep.hgrasp,
                         "the program the scenes run with (default: this hgrasp; e.g. another "
                         "build, or a wrapper)");
+  cmd_sweep->add_flag("--prepare", sweep.prepare,
+                      "write the sweep's manifest and scenario files only (for --shard runs "
+                      "elsewhere, e.g. GNU parallel)");
   cmd_sweep->add_flag("--slurm", sweep.slurm,
                       "submit the scenes as a Slurm job array (results in --out, which must be "
                       "shared), instead of running them here");

@@ -275,6 +275,39 @@ TEST(CliSweep, ABaselineCatchesAFigureMadeWorseOnPurpose) {
   fs::remove_all(dir);
 }
 
+TEST(CliSweep, APreparedSweepRunsAsShardsAndMerges) {
+  const fs::path dir = Fresh("shards");
+  const std::string out = (dir / "out").string();
+  auto r = RunHgrasp("sweep --family random_boxes --seeds 1..3 --stage scan --prepare --out " + out,
+                     30);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "out" / "sweep.json"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "rows"));  // nothing ran
+  // Two shards, as two machines would run them: scenes 0 and 2, then scene 1.
+  r = RunHgrasp("sweep --out " + out + " --shard 0/2", 60);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "out" / "rows" / "random_1.json"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "rows" / "random_2.json"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "rows" / "random_3.json"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "summary.json"));  // a shard writes rows only
+  r = RunHgrasp("sweep merge " + out, 30);
+  EXPECT_EQ(r.status, 1) << r.output;  // not complete yet
+  EXPECT_FALSE(Read(dir / "out" / "summary.json")["sweep"]["complete"].get<bool>());
+  r = RunHgrasp("sweep --out " + out + " --shard 1/2", 60);
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = RunHgrasp("sweep merge " + out, 30);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const json summary = Read(dir / "out" / "summary.json");
+  EXPECT_TRUE(summary["sweep"]["complete"].get<bool>());
+  ASSERT_EQ(summary["scenes"].size(), 3u);
+  for (const json& row : summary["scenes"]) {
+    EXPECT_EQ(row["status"], "ok") << row.dump();
+    EXPECT_GT(row["range"]["points"].get<int>(), 10000) << row.dump();
+    EXPECT_TRUE(row["range"]["rms_mm"].is_number()) << row.dump();
+  }
+  fs::remove_all(dir);
+}
+
 TEST(CliSweep, BadOptionsExitTwo) {
   const fs::path dir = Fresh("bad_options");
   struct Case {

@@ -559,6 +559,13 @@ int Sweep(const SweepOptions& o) {
     }
     WriteFileWhole((dir / "sweep.json").string(), manifest.dump(1) + "\n");
     if (o.slurm) return SubmitToSlurm(o, dir, manifest);
+    if (o.prepare) {
+      std::fprintf(stderr,
+                   "sweep: prepared %zu scenes in %s; run shards with `hgrasp sweep --out %s "
+                   "--shard I/K`, then `hgrasp sweep merge %s`\n",
+                   manifest["scenes"].size(), dir.c_str(), dir.c_str(), dir.c_str());
+      return 0;
+    }
   }
 
   const std::vector<SceneEntry> scenes = ManifestScenes(manifest);
