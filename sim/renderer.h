@@ -37,8 +37,15 @@ class Renderer {
 
   /// Colour only (one render pass, no depth read-back, shadows from a map of at most
   /// kColorShadowSize^2 texels): what a camera sees when no light sheet needs the scene's
-  /// geometry, at about a third of Render's cost.
+  /// geometry, at about a third of Render's cost. Draws only the geoms that can change the image
+  /// (in view, or casting a shadow on what is in view): the same pixels as drawing them all.
   cv::Mat RenderColor(const mjData* data, int camera_id);
+
+  /// Whether RenderColor leaves out the geoms that cannot change its image (default on; off, it
+  /// draws them all: the reference the tests compare with).
+  void set_culling_enabled(bool on) { culling_enabled_ = on; }
+  /// Geoms the last RenderColor left out.
+  int culled_geoms() const { return culled_geoms_; }
 
   /// Intrinsics of camera `camera_id` for this renderer's image size (from cam_fovy).
   PinholeCamera Intrinsics(int camera_id) const;
@@ -65,6 +72,8 @@ class Renderer {
   mjrContext color_context_;  // the same, with a smaller shadow map (RenderColor)
   std::vector<unsigned char> rgb_;
   std::vector<float> depth_;
+  bool culling_enabled_ = true;
+  int culled_geoms_ = 0;
 };
 
 }  // namespace hgrasp::sim

@@ -233,20 +233,31 @@ class SimStereoCamera final : public device::StereoCamera {
  public:
   SimStereoCamera(World* world, StereoRig* rig) : world_(world), rig_(rig) {}
 
-  Status Grab(device::StereoFrame* frame) override {
+  Status Grab(device::StereoFrame* frame) override { return NextFrame(frame, true); }
+  Status GrabWithoutImages(device::StereoFrame* frame) override { return NextFrame(frame, false); }
+
+ private:
+  // One frame period on, the readings latched; the exposure composed, or (without images) left
+  // to the rig's pending renders, so that later frames are the same either way.
+  Status NextFrame(device::StereoFrame* frame, bool images) {
     world_->Step(kFramePeriodS);
     frame->t_s = world_->time();
     frame->sequence = sequence_++;
     frame->laser_encoder_count = SimStripeLaser::Count(world_);
     frame->laser_on = world_->laser_on();
     frame->head = SimHead::Joints(world_);
-    StereoImages images = rig_->Expose(frame->sequence);
-    frame->left = std::move(images.image[kLeft]);
-    frame->right = std::move(images.image[kRight]);
+    if (!images) {
+      rig_->SkipExposure();
+      frame->left.release();
+      frame->right.release();
+      return Status::kOk;
+    }
+    StereoImages exposure = rig_->Expose(frame->sequence);
+    frame->left = std::move(exposure.image[kLeft]);
+    frame->right = std::move(exposure.image[kRight]);
     return Status::kOk;
   }
 
- private:
   World* world_;
   StereoRig* rig_;
   std::uint64_t sequence_ = 0;

@@ -1,7 +1,8 @@
 #pragma once
 /// @file Simulated implementations of every device of the seam (src/device/), backed by one
 /// World. Time is lockstep: commands set targets at once, and each StereoCamera::Grab advances
-/// simulated time by one frame period (40 ms) and renders the exposure.
+/// simulated time by one frame period (40 ms) and renders the exposure (GrabWithoutImages
+/// advances it without rendering).
 
 #include <memory>
 #include <optional>

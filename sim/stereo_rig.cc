@@ -1,5 +1,6 @@
 #include "sim/stereo_rig.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 
@@ -82,16 +83,32 @@ void StereoRig::CheckCache() {
   if (!same) {
     valid_ = {false, false};
     color_valid_ = {false, false};
+    pending_view_ = {};
+    pending_color_ = {};
     key_ = key;
   }
 }
 
+StereoRig::Snapshot StereoRig::TakeSnapshot() {
+  const auto free = std::find_if(snapshots_.begin(), snapshots_.end(),
+                                 [](const Snapshot& s) { return s.use_count() == 1; });
+  if (free == snapshots_.end()) {
+    snapshots_.emplace_back(mj_makeData(world_->model()), mj_deleteData);
+    mj_copyData(snapshots_.back().get(), world_->model(), world_->data());
+    return snapshots_.back();
+  }
+  mj_copyData(free->get(), world_->model(), world_->data());
+  return *free;
+}
+
 const cv::Mat& StereoRig::Color(int camera) {
   CheckCache();
-  if (valid_[camera]) return views_[camera].images.color;
+  if (valid_[camera] || pending_view_[camera]) return View(camera).images.color;
   if (!color_valid_[camera]) {
-    colors_[camera] = renderer_->RenderColor(world_->data(), camera_ids_[camera]);
+    const mjData* state = pending_color_[camera] ? pending_color_[camera].get() : world_->data();
+    colors_[camera] = renderer_->RenderColor(state, camera_ids_[camera]);
     color_valid_[camera] = true;
+    pending_color_[camera].reset();
     ++color_renders_;
   }
   return colors_[camera];
@@ -101,10 +118,12 @@ const CameraView& StereoRig::View(int camera) {
   CheckCache();
   if (!valid_[camera]) {
     const int id = camera_ids_[camera];
+    const mjData* state = pending_view_[camera] ? pending_view_[camera].get() : world_->data();
     views_[camera] =
-        CameraView::Make(renderer_->Intrinsics(id), Renderer::OpticalFramePose(world_->data(), id),
-                         renderer_->Render(world_->data(), id), RedReflectance());
+        CameraView::Make(renderer_->Intrinsics(id), Renderer::OpticalFramePose(state, id),
+                         renderer_->Render(state, id), RedReflectance());
     valid_[camera] = true;
+    pending_view_[camera].reset();
     ++full_renders_;
   }
   return views_[camera];
@@ -216,6 +235,22 @@ StereoImages StereoRig::Expose(std::uint64_t frame_key) {
   }
   last_crossings_ = out.crossings;
   return out;
+}
+
+void StereoRig::SkipExposure() {
+  // What Expose would render now: a full view when a light sheet is lit, else the colour image
+  // (or the colour of a full view at hand), each only when the cache holds none.
+  const bool lit = !Sheets().empty();
+  CheckCache();
+  Snapshot now;  // one copy of the state for both cameras
+  for (int cam = 0; cam < 2; ++cam) {
+    const bool view_at_hand = valid_[cam] || pending_view_[cam];
+    const bool color_at_hand = view_at_hand || color_valid_[cam] || pending_color_[cam];
+    if (lit ? view_at_hand : color_at_hand) continue;
+    if (!now) now = TakeSnapshot();
+    (lit ? pending_view_ : pending_color_)[cam] = now;
+  }
+  last_crossings_ = {};
 }
 
 }  // namespace hgrasp::sim

@@ -51,25 +51,37 @@ class StereoRig {
   /// from the scenario seed and `frame_key`, saturated to 0-255.
   StereoImages Expose(std::uint64_t frame_key);
 
+  /// An exposure nobody looks at (a frame grabbed only to wait for a motion to end): no images.
+  /// The renders Expose would make now are not made but left pending with a copy of the world's
+  /// state, made from it only when a later exposure or view needs them: every later image is
+  /// exactly what it would be had this been an Expose (the cache keeps a render made anywhere
+  /// within its tolerance of the state it was made at). Empties last_crossings().
+  void SkipExposure();
+
   /// The stripe crossings drawn in the last exposure, per camera (ground truth for tests).
   const std::array<std::vector<StripeCrossing>, 2>& last_crossings() const {
     return last_crossings_;
   }
 
   void set_cache_enabled(bool on) { cache_enabled_ = on; }
-  /// Full scene renders so far (each one renders both colour/depth and labels).
+  /// Full scene renders made so far (each one renders both colour/depth and labels).
   int full_renders() const { return full_renders_; }
-  /// Colour-only renders so far.
+  /// Colour-only renders made so far.
   int color_renders() const { return color_renders_; }
   const StripeOptics& optics() const { return optics_; }
   Renderer& renderer() { return *renderer_; }
   int camera_id(int camera) const { return camera_ids_[camera]; }
 
  private:
+  /// A copy of the world's state (mjData) for a pending render.
+  using Snapshot = std::shared_ptr<mjData>;
+
   std::vector<double> SceneKey() const;
-  /// Drops the cached renders when the scene moved since they were made.
+  /// Drops the cached and pending renders when the scene moved since they were made.
   void CheckCache();
   std::vector<double> RedReflectance() const;
+  /// The world's state now, in a copy no pending render holds (reused: mj_makeData is costly).
+  Snapshot TakeSnapshot();
 
   World* world_;
   StripeOptics optics_;
@@ -80,6 +92,9 @@ class StereoRig {
   std::array<bool, 2> valid_ = {false, false};
   std::array<cv::Mat, 2> colors_;
   std::array<bool, 2> color_valid_ = {false, false};
+  // Renders that skipped exposures left to be made, from the state they would have been made at.
+  std::array<Snapshot, 2> pending_view_, pending_color_;
+  std::vector<Snapshot> snapshots_;
   std::vector<double> key_;
   std::array<std::vector<StripeCrossing>, 2> last_crossings_;
   bool cache_enabled_ = true;

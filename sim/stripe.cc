@@ -100,9 +100,12 @@ std::vector<StripeCrossing> AddStripes(const CameraView& view,
       // g(u) = 1/z(u) + n.ray(u)/d is zero where the surface meets the sheet; along a row of a
       // plane both terms are linear in u, so the root between two pixels is exact for planes.
       auto g = [&](int c) { return 1.0 / z[c] + (a * c + b) / plane_C.d; };
+      // Each pixel's g is computed once: the right end of one pair is the left end of the next.
+      double g1 = w > 0 && z[0] > 0 ? g(0) : 0.0;
       for (int c = 0; c + 1 < w; ++c) {
+        const double g0 = g1;
+        g1 = z[c + 1] > 0 ? g(c + 1) : 0.0;
         if (z[c] <= 0 || z[c + 1] <= 0) continue;
-        const double g0 = g(c), g1 = g(c + 1);
         if ((g0 > 0) == (g1 > 0)) continue;
         if (!Continuous(z, w, c, optics)) continue;
         const double t = g0 / (g0 - g1);

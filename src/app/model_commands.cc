@@ -55,7 +55,11 @@ nlohmann::json Mat(const Eigen::Matrix3d& R) {
 
 void RecordScanTruth(sim::SimRobot* robot, sim::ScanTruth* truth,
                      const device::StereoFrame& frame, const task::TaskView& view) {
-  if (robot == nullptr || view.stage != "look" || !view.moment.empty() || !frame.laser_on) return;
+  // Frames without images are the laser's slew before the sweep, not the scan's.
+  if (robot == nullptr || view.stage != "look" || !view.moment.empty() || !frame.laser_on ||
+      frame.left.empty()) {
+    return;
+  }
   truth->AddFrame(robot->rig(), frame.laser_encoder_count);
 }
 
@@ -302,6 +306,7 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   if (EndedAtStart(robot, scenario, &out, plan ? "plan" : "model")) return 1;
   device::RobotDevices& dev = robot.devices;
   sim::ScanTruth scan_truth;
+  config.sink_needs_every_image = false;  // the sink records the scan's truth only
   task::GraspTask task(&dev, robot_model, config,
                        [&](const device::StereoFrame& frame, const task::TaskView& view) {
                          RecordScanTruth(robot.truth(), &scan_truth, frame, view);

@@ -114,6 +114,9 @@ int Run(const RunOptions& o) {
     }
   };
   sim::ScanTruth scan_truth;
+  // Only the video shows every frame; the pictures are the key moments', which always come with
+  // their images: frames grabbed to wait for a move need none (the twin does not render them).
+  config.sink_needs_every_image = video.isOpened();
   task::GraspTask task(&dev, robot_model, config,
                        [&](const device::StereoFrame& frame, const task::TaskView& view) {
                          RecordScanTruth(truth, &scan_truth, frame, view);

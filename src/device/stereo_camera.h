@@ -25,6 +25,10 @@ class StereoCamera {
   virtual ~StereoCamera() = default;
   /// Blocks until the next frame pair (one every 40 ms at PAL rate) and fills `frame`.
   virtual Status Grab(StereoFrame* frame) = 0;
+  /// Grab for a caller that will not look at the frame's images (it only waits for a motion to
+  /// end): a camera that saves work by not making them leaves `left` and `right` empty (the
+  /// simulator does not render them); by default it is Grab.
+  virtual Status GrabWithoutImages(StereoFrame* frame) { return Grab(frame); }
 };
 
 }  // namespace hgrasp::device

@@ -16,12 +16,12 @@ constexpr double kFramePeriodS = 0.04;    // PAL, 25 frames/s
 constexpr double kSlewCountsPerS = 9000;  // fast move to the start of a sweep
 
 // Grabs frames until the laser stops; the last frame has it at rest. `failed`: the device whose
-// status ended it.
+// status ended it. The frames only keep time: grabbed without images.
 device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* frame,
                             const StopRequest* stop, std::string* failed) {
   device::StripeLaserState s;
   for (int i = 0; i < 1000; ++i) {
-    if (const auto st = dev.cameras->Grab(frame); st != device::Status::kOk) {
+    if (const auto st = dev.cameras->GrabWithoutImages(frame); st != device::Status::kOk) {
       *failed = "cameras";
       return st;
     }

@@ -44,6 +44,8 @@ struct ScanResult {
 
 /// Runs the laser from sweep.start_count to sweep.end_count at constant speed (laser already
 /// on or off as the caller set it) and calls `on_frame` for every frame grabbed while it moves.
+/// The frames of the fast move to the start are grabbed without images
+/// (StereoCamera::GrabWithoutImages).
 /// Returns the device status that ended it early, or kOk; `failed_device` (when given) is then
 /// set to the device that said it ("laser" or "cameras").
 device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <utility>
 
+#include "common/error.h"
 #include "common/paths.h"
 #include "model/colour.h"
 #include "robot/kinematic_tree.h"
@@ -78,6 +79,14 @@ class GraspTask::SinkCamera final : public device::StereoCamera {
     return s;
   }
 
+  device::Status GrabWithoutImages(device::StereoFrame* frame) override {
+    // A sink that needs every frame's images (a video) gets them.
+    const bool images = task_->sink_ && task_->config_.sink_needs_every_image;
+    const device::Status s = images ? inner_->Grab(frame) : inner_->GrabWithoutImages(frame);
+    if (s == device::Status::kOk) task_->OnFrame(*frame);
+    return s;
+  }
+
   std::unique_ptr<device::StereoCamera> Release() { return std::move(inner_); }
 
  private:
@@ -122,7 +131,10 @@ TaskView GraspTask::View(std::string_view moment) const {
 }
 
 void GraspTask::Moment(std::string_view moment) {
-  if (sink_ && have_frame_) sink_(last_frame_, View(moment));
+  if (!sink_ || !have_frame_) return;
+  // Key moments follow tracked or settling frames, never a wait's frame without images.
+  HGRASP_DEMAND_MSG(!last_frame_.left.empty(), "a key moment's frame has no images");
+  sink_(last_frame_, View(moment));
 }
 
 void GraspTask::BeginStage(std::string_view name) {
@@ -182,9 +194,12 @@ std::string GraspTask::HandKey() const {
   return "hand_" + std::string(device::ToString(result_.plan->side));
 }
 
-bool GraspTask::GrabFrame(bool track) {
+bool GraspTask::GrabFrame(bool track, bool images) {
+  HGRASP_DEMAND(images || !track);
   device::StereoFrame frame;
-  if (!DeviceOk(dev_->cameras->Grab(&frame), "cameras", "grab")) return false;
+  const device::Status s =
+      images ? dev_->cameras->Grab(&frame) : dev_->cameras->GrabWithoutImages(&frame);
+  if (!DeviceOk(s, "cameras", "grab")) return false;
   if (StopRequested(config_.stop)) {
     return Fail(Failure::kInterrupted, config_.stop->Reason() + " during the " +
                                            std::string(stage_));
@@ -196,7 +211,8 @@ bool GraspTask::WaitUntil(const std::function<bool(bool*)>& done, std::string_vi
                           bool track) {
   const double t0 = have_frame_ ? last_frame_.t_s : 0.0;
   for (;;) {
-    if (!GrabFrame(track)) return false;
+    // Untracked, the frames only keep time while the move goes on: nobody looks at their images.
+    if (!GrabFrame(track, /*images=*/track)) return false;
     bool finished = false;
     if (!done(&finished)) return false;
     if (finished) return true;

@@ -22,6 +22,8 @@
 /// Every frame grabbed (the scan's too) goes to the frame sink with a TaskView: what the task
 /// believes at that moment (gripper pose, target), for pictures and video. Key moments (servo
 /// start, pre-grasp reached, grasp reached, lifted) are sent again with TaskView::moment set.
+/// Frames grabbed only to wait for a move to end come without images unless the sink needs
+/// every frame's (TaskConfig::sink_needs_every_image).
 
 #include <array>
 #include <chrono>
@@ -97,6 +99,12 @@ struct TaskConfig {
   double min_held_opening_m = 0.01;
   /// A move (arm, hand, head) that has not ended after this much device time is a device error.
   double move_timeout_s = 10.0;
+  /// Whether the frame sink needs the images of every frame (a video of the run). When false, or
+  /// with no sink, the frames grabbed only to wait for a move to end (the scan's laser moving to
+  /// its start, the arm's approach, the head's re-centring) are grabbed without images
+  /// (StereoCamera::GrabWithoutImages; the simulator does not render them) and reach the sink
+  /// without them. Key moments always come with theirs.
+  bool sink_needs_every_image = true;
 
   TaskConfig();
 };
@@ -213,7 +221,8 @@ class GraspTask {
 
   void OnFrame(const device::StereoFrame& frame);
   TaskView View(std::string_view moment) const;
-  /// Sends the last frame to the sink again, as the key moment `moment`.
+  /// Sends the last frame (which must have its images) to the sink again, as the key moment
+  /// `moment`.
   void Moment(std::string_view moment);
   void BeginStage(std::string_view name);
   void EndStage();
@@ -226,11 +235,13 @@ class GraspTask {
   /// The devices keys of the planned side's arm and hand: "arm_left", "hand_right", ...
   std::string ArmKey() const;
   std::string HandKey() const;
-  /// One frame, tracked when `track` and a tracker runs.
-  bool GrabFrame(bool track);
+  /// One frame, tracked when `track` and a tracker runs; without images (when the sink does
+  /// not need them) when not `images`, which must then not be tracked.
+  bool GrabFrame(bool track, bool images = true);
   /// Grabs frames until `done` holds (false and device_error after move_timeout_s).
   /// Grabs frames until done(&finished) gives finished; false (the task failed) when done
-  /// returns false, a grab fails, a stop is requested, or it takes move_timeout_s.
+  /// returns false, a grab fails, a stop is requested, or it takes move_timeout_s. Untracked
+  /// frames are grabbed without images.
   bool WaitUntil(const std::function<bool(bool*)>& done, std::string_view what, bool track);
   // Whether the device has stopped moving (*still); false when its read failed (the task has
   // then failed, naming it).

@@ -101,7 +101,7 @@ TEST(CliHostileTest, AWordThatIsNoCommandIsNamed) {
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     const std::string word = std::string(args).substr(0, std::string(args).find(' '));
     EXPECT_NE(r.output.find("'" + word + "' is no command"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("render, calibrate, scan, model, plan, run, generate, emulate"),
+    EXPECT_NE(r.output.find("render, calibrate, scan, model, plan, run, generate, sweep, emulate"),
               std::string::npos)
         << r.output;
   }

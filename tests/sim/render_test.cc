@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
+#include <vector>
 
 #include "sim/stereo_rig.h"
 #include "tests/sim/sim_test_util.h"
@@ -183,6 +185,53 @@ objects:
   rig.Expose(0);
   EXPECT_EQ(rig.full_renders(), 0);
   EXPECT_EQ(rig.color_renders(), 2);
+}
+
+// The colour-only render leaves out the geoms that cannot change it (out of view, and no shadow
+// on what is in view): its image is the one that draws them all, pixel for pixel, with the arms
+// and the head anywhere within a fifth of their ranges around home and the LEDs switched at
+// random (the arms in and out of view, shadows cast into it from out of view).
+TEST(RenderColorTest, CulledRenderIsTheFullRenderPixelForPixel) {
+  World world(ScenarioFromYaml(R"(name: culling
+wall: {x: 0.9}
+objects:
+  - {name: a, shape: box, size: [0.06, 0.09, 0.12], position: [0.30, 0.06], yaw_deg: 25, color: [0.95, 0.85, 0.1]}
+  - {name: b, shape: box, size: [0.10, 0.05, 0.05], position: [0.26, -0.09], yaw_deg: -10, color: [0.1, 0.3, 0.9], specular: true}
+)"));
+  StereoRig rig(&world);
+  Renderer& renderer = rig.renderer();
+  const mjModel* m = world.model();
+  mjData* d = world.data();
+  const std::vector<double> home(d->qpos, d->qpos + m->nq);
+  std::mt19937 rng(7);
+  int culled = 0, renders = 0;
+  for (int pose = 0; pose < 40; ++pose) {
+    for (int j = 0; j < m->njnt; ++j) {
+      if (m->jnt_type[j] == mjJNT_FREE || !m->jnt_limited[j]) continue;
+      const double lo = m->jnt_range[2 * j], hi = m->jnt_range[2 * j + 1];
+      const double q = home[m->jnt_qposadr[j]], spread = 0.2 * (hi - lo);
+      d->qpos[m->jnt_qposadr[j]] = std::uniform_real_distribution<double>(
+          std::max(lo, q - spread), std::min(hi, q + spread))(rng);
+    }
+    for (const char* side : {"left", "right"}) {
+      for (int i = 0; i < world.LedCount(side); ++i) world.SetLed(side, i, rng() % 2 == 0);
+    }
+    mj_forward(m, d);
+    for (int cam : {kLeft, kRight}) {
+      renderer.set_culling_enabled(false);
+      const cv::Mat all = renderer.RenderColor(d, rig.camera_id(cam));
+      EXPECT_EQ(renderer.culled_geoms(), 0);
+      renderer.set_culling_enabled(true);
+      const cv::Mat culled_image = renderer.RenderColor(d, rig.camera_id(cam));
+      culled += renderer.culled_geoms();
+      ++renders;
+      ASSERT_EQ(cv::norm(all, culled_image, cv::NORM_INF), 0)
+          << "pose " << pose << ", camera " << cam;
+    }
+  }
+  std::printf("culling: %.1f of %d geoms left out per render on average\n",
+              static_cast<double>(culled) / renders, m->ngeom);
+  EXPECT_GT(culled, 10 * renders);  // most of the robot is out of view
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The laser stripe against geometry worked out by hand: its centre on a plane of known pose, its
 // absence in the laser's shadow, brightness following surface colour, interference and mirror
-// reflections, and the per-head-pose cache giving what a full render per frame gives.
+// reflections, the per-head-pose cache giving what a full render per frame gives, and frames
+// grabbed without images changing no other frame.
 
 #include <gtest/gtest.h>
 
@@ -338,6 +339,61 @@ TEST(StripeTest, CacheThroughTheDevicesStaysWithinOneGreyLevel) {
   std::printf("device sweep: %d full renders for 12 frames; %d of %d channel values differ by 1\n",
               cached.rig().full_renders(), differing, 12 * 320 * 240 * 3);
   EXPECT_LT(cached.rig().full_renders(), full.rig().full_renders() / 2);
+}
+
+TEST(StripeTest, FramesGrabbedWithoutImagesLeaveTheOtherFramesAsTheyWere) {
+  // Two robots on one script; one grabs the frames of each wait without images. The renders
+  // those frames would have made (the laser motor's start jolts the head past the cache's
+  // tolerance, the arm moves, LEDs switch) are made later from the state they would have been
+  // made at: every frame both grab in full is the same to the last bit, and fewer renders are
+  // made.
+  const std::string yaml =
+      std::string(kTwoColours)
+          .replace(std::string(kTwoColours).find("camera_noise: 0"), 15, "camera_noise: 2");
+  SimRobot skipping(ScenarioFromYaml(yaml)), full(ScenarioFromYaml(yaml));
+  auto a = skipping.TakeDevices(), b = full.TakeDevices();
+  // `waits` frames (a: without images), then `looks` frames both grab in full, compared.
+  const auto frames = [&](int waits, int looks) {
+    device::StereoFrame fa, fb;
+    for (int k = 0; k < waits; ++k) {
+      ASSERT_EQ(a.cameras->GrabWithoutImages(&fa), device::Status::kOk);
+      ASSERT_EQ(b.cameras->Grab(&fb), device::Status::kOk);
+      EXPECT_TRUE(fa.left.empty() && fa.right.empty());
+      EXPECT_EQ(fa.t_s, fb.t_s);
+      EXPECT_EQ(fa.laser_encoder_count, fb.laser_encoder_count);
+    }
+    for (int k = 0; k < looks; ++k) {
+      ASSERT_EQ(a.cameras->Grab(&fa), device::Status::kOk);
+      ASSERT_EQ(b.cameras->Grab(&fb), device::Status::kOk);
+      EXPECT_EQ(cv::norm(fa.left, fb.left, cv::NORM_INF), 0) << "frame " << fa.sequence;
+      EXPECT_EQ(cv::norm(fa.right, fb.right, cv::NORM_INF), 0) << "frame " << fa.sequence;
+    }
+  };
+  frames(1, 1);  // laser off: colour-only renders
+  for (auto* d : {&a, &b}) {
+    d->laser->SetLaser(true);
+    d->laser->MoveTo(2400, 9000);  // the scan's slew to its start
+  }
+  frames(8, 4);
+  for (auto* d : {&a, &b}) d->laser->MoveTo(2000, 400);  // a stretch of sweep
+  frames(4, 4);
+  device::ArmState arm;
+  a.ArmOf(device::Side::kRight).Read(&arm);
+  device::Joint6 goal = arm.q;
+  goal[0] += 0.3;
+  goal[1] += 0.2;
+  for (auto* d : {&a, &b}) {
+    d->laser->SetLaser(false);
+    ASSERT_EQ(d->ArmOf(device::Side::kRight).MoveJoints(goal), device::Status::kOk);
+  }
+  frames(12, 2);  // the arm moving, then settling
+  for (auto* d : {&a, &b}) d->leds->Set(device::Side::kRight, 0b101);
+  frames(2, 2);
+  const int renders_a = skipping.rig().full_renders() + skipping.rig().color_renders();
+  const int renders_b = full.rig().full_renders() + full.rig().color_renders();
+  std::printf("%d renders with the waits' frames grabbed without images, %d with them\n", renders_a,
+              renders_b);
+  EXPECT_LT(renders_a, renders_b);
 }
 
 }  // namespace

@@ -22,8 +22,9 @@ TEST(GraspTaskSim, DefaultScenarioIsGraspedAndTheSameSeedGivesTheSameRun) {
   EXPECT_TRUE(a.Success()) << a.result.message;
   EXPECT_GT(a.result.lift_height_m, 0.8 * scenario.task->lift_m);
   EXPECT_LT(a.result.lift_height_m, 1.2 * scenario.task->lift_m);
-  // Deterministic: the same scenario and seed give the same figures (timings aside).
-  const testing::SimOutcome b = RunInSim(scenario);
+  // Deterministic: the same scenario and seed give the same figures (timings aside), whether or
+  // not the frames of the waits come with images.
+  const testing::SimOutcome b = RunInSim(scenario, {}, {}, /*every_image=*/false);
   ASSERT_EQ(a.result.servo.size(), b.result.servo.size());
   for (std::size_t i = 0; i < a.result.servo.size(); ++i) {
     EXPECT_EQ(a.result.servo[i].iterations, b.result.servo[i].iterations);
@@ -36,6 +37,41 @@ TEST(GraspTaskSim, DefaultScenarioIsGraspedAndTheSameSeedGivesTheSameRun) {
   EXPECT_EQ(a.result.device_s, b.result.device_s);
   EXPECT_EQ(a.result.measurements, b.result.measurements);
   EXPECT_EQ(a.rise_m, b.rise_m);
+  ASSERT_TRUE(a.result.scan && b.result.scan);
+  EXPECT_EQ(a.result.scan->points, b.result.scan->points);
+  EXPECT_EQ(a.result.scan->rejected, b.result.scan->rejected);
+  ASSERT_EQ(a.result.scene->boxes.size(), b.result.scene->boxes.size());
+  for (std::size_t i = 0; i < a.result.scene->boxes.size(); ++i) {
+    EXPECT_EQ(a.result.scene->boxes[i].X_WO.matrix(), b.result.scene->boxes[i].X_WO.matrix());
+    EXPECT_EQ(a.result.scene->boxes[i].size_O, b.result.scene->boxes[i].size_O);
+  }
+}
+
+// The frames grabbed only to wait for a move (here the scan's slew to its start) come without
+// images when the sink does not need every image, and with them when it does.
+TEST(GraspTaskSim, FramesOfTheWaitsComeWithoutImagesUnlessTheSinkNeedsEveryImage) {
+  const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  for (const bool every_image : {true, false}) {
+    sim::SimRobot robot(scenario);
+    device::RobotDevices dev = robot.TakeDevices();
+    TaskConfig config = testing::ConfigFor(scenario);
+    config.sink_needs_every_image = every_image;
+    int frames = 0, without = 0;
+    GraspTask task(&dev, testing::SimRobotModel(), config,
+                   [&](const device::StereoFrame& frame, const TaskView&) {
+                     ++frames;
+                     without += frame.left.empty() || frame.right.empty();
+                   });
+    ASSERT_TRUE(task.Look()) << task.result().message;
+    std::printf("sink needs every image %d: %d of %d frames without images\n", every_image, without,
+                frames);
+    if (every_image) {
+      EXPECT_EQ(without, 0);
+    } else {
+      EXPECT_GT(without, 0);
+      EXPECT_LT(without, 20);  // the slew only: the sweep's frames all have theirs
+    }
+  }
 }
 
 // The paper's claim: no camera-to-arm calibration. The head is really mounted 2 cm and 3 deg

@@ -46,11 +46,12 @@ inline RobotModel SimRobotModel() {
 
 using FrameHook = std::function<void(const device::StereoFrame&, const TaskView&, sim::SimRobot&)>;
 
-/// Runs the whole task; `on_frame` sees every frame (e.g. to hide the LEDs). The truth of the
-/// grasp is taken when the servo reaches it, that of the approach when the servo starts.
+/// Runs the whole task; `on_frame` sees every frame (e.g. to hide the LEDs), with its images
+/// unless not `every_image` (TaskConfig::sink_needs_every_image). The truth of the grasp is taken
+/// when the servo reaches it, that of the approach when the servo starts.
 inline SimOutcome RunInSim(const sim::Scenario& scenario,
                            const sim::WorldOptions& world_options = {},
-                           const FrameHook& on_frame = {}) {
+                           const FrameHook& on_frame = {}, bool every_image = true) {
   sim::SimRobot robot(scenario, world_options);
   device::RobotDevices dev = robot.TakeDevices();
   const RobotModel model = SimRobotModel();
@@ -70,7 +71,9 @@ inline SimOutcome RunInSim(const sim::Scenario& scenario,
     out.at_grasp =
         sim::GripperPoseError(robot.world(), view.side, X_WCL, task_ptr->result().plan->X_WE);
   };
-  GraspTask task(&dev, model, ConfigFor(scenario), sink);
+  TaskConfig config = ConfigFor(scenario);
+  config.sink_needs_every_image = every_image;
+  GraspTask task(&dev, model, config, sink);
   task_ptr = &task;
   bool ok = task.Look() && task.Plan();
   if (ok) {
