@@ -105,7 +105,7 @@ struct SweepOptions {
   /// Scenario files, and folders whose *.yaml files are taken (sorted by name).
   std::vector<std::string> inputs;
   /// Generated scenes: a family (kSceneFamilies) over a seed range, written to DIR/scenarios/.
-  std::string family;
+  std::string family = "random_boxes";
   std::optional<std::pair<std::uint64_t, std::uint64_t>> seeds;
   std::string stage = "run";  ///< scan, model, plan or run
   std::string out_dir;

@@ -278,7 +278,8 @@ TEST(CliSweep, ABaselineCatchesAFigureMadeWorseOnPurpose) {
 TEST(CliSweep, APreparedSweepRunsAsShardsAndMerges) {
   const fs::path dir = Fresh("shards");
   const std::string out = (dir / "out").string();
-  auto r = RunHgrasp("sweep --family random_boxes --seeds 1..3 --stage scan --prepare --out " + out,
+  // --seeds alone: the family random_boxes.
+  auto r = RunHgrasp("sweep --seeds 1..3 --stage scan --prepare --out " + out,
                      30);
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(dir / "out" / "sweep.json"));
