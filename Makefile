@@ -3,6 +3,9 @@
 # build  configures and builds (Release) in build/
 # run    builds, then runs the whole grasp (hgrasp run) on the default scenario headless into
 #        out/default/
+# twin   builds, then starts `hgrasp twin` on scenarios/twin_robot.yaml (every device on its real
+#        wire, in wall-clock time) and runs the whole grasp against it through the real drivers
+#        into out/twin/; the twin's account (frames, overruns, truth) in $(TWIN_DIR)/twin.json
 # test   builds, then runs every test (ctest)
 # bench  builds, then runs the benchmarks in tests/bench/
 # fuzz   builds the protocol decoders' and the file loaders' libFuzzer targets with clang (ASan + UBSan) in build-fuzz/
@@ -12,6 +15,7 @@ JOBS     ?= 2
 BUILD    ?= build
 SCENARIO ?= scenarios/default.yaml
 OUT      ?= out/default
+TWIN_DIR ?= /tmp/hgrasp-twin
 FUZZ_BUILD ?= build-fuzz
 FUZZ_RUNS  ?= 1000000
 FUZZERS    := val2_fuzz biclops_fuzz sensorhand_fuzz laser_board_fuzz loaders_fuzz
@@ -21,12 +25,13 @@ PACKAGES := build-essential cmake pkg-config git \
 	libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
 	libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri \
 	libgtest-dev libgmock-dev libbenchmark-dev \
-	gstreamer1.0-plugins-base \
+	gstreamer1.0-plugins-base gstreamer1.0-plugins-bad gstreamer1.0-tools \
+	libgstreamer1.0-dev libgstreamer-plugins-base1.0-dev libmujoco-samples \
 	slurm-wlm munge chromium python3-junitparser
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps build run test bench fuzz clean
+.PHONY: deps build run twin test bench fuzz clean
 
 deps:
 	@missing=$$(for p in $(PACKAGES); do \
@@ -47,6 +52,15 @@ build: deps $(BUILD)/CMakeCache.txt
 run: build
 	./$(BUILD)/hgrasp run $(SCENARIO) --out $(OUT)
 	@echo "make run: $(OUT)/servo_*.png (tracked and target hand at key moments), left.avi (the left camera), grasp.png, models.png, segments.png, range.png, models.obj, report.json"
+
+twin: build
+	@rm -f $(TWIN_DIR)/ready; \
+	./$(BUILD)/hgrasp twin scenarios/twin_robot.yaml --dir $(TWIN_DIR) & twin=$$!; \
+	for i in $$(seq 600); do [ -e $(TWIN_DIR)/ready ] && break; sleep 0.1; done; \
+	./$(BUILD)/hgrasp run scenarios/twin_robot.yaml --out out/twin; status=$$?; \
+	kill -INT $$twin; wait $$twin; \
+	echo "make twin: out/twin/ (the run through the real drivers), $(TWIN_DIR)/twin.json (the twin: frames, overruns, truth, command logs), $(TWIN_DIR)/world.xml (mujoco-simulate opens it)"; \
+	exit $$status
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)

@@ -227,7 +227,11 @@ Status BiclopsHead::Exchange(const pmd::Command& command, int result_words, pmd:
         return Status::kBadReply;
       }
       *reply = decoder_.reply();
-      if (reply->status != pmd::status::kOk) ++counters_.error_replies;
+      if (reply->status != pmd::status::kOk) {
+        ++counters_.error_replies;
+      } else {
+        Record(command, true);  // status 0: the chip executed it
+      }
       const double rtt = Seconds(Clock::now() - sent);
       rtt_s_ = rtt_s_ > 0.0 ? 0.9 * rtt_s_ + 0.1 * rtt : rtt;
       return Status::kOk;
@@ -308,6 +312,7 @@ Status BiclopsHead::Fail(Status s) {
     for (auto& axis : reg_) axis.fill(Known{});
     active_target_.fill(Known{});
     at_rest_.fill(false);
+    rest_known_.fill(false);
   }
   return s;
 }
@@ -321,9 +326,12 @@ Status BiclopsHead::Query(int axis, std::uint8_t opcode, int result_words, pmd::
   for (int attempt = 0; attempt <= options_.max_resends; ++attempt) {
     Status s = SyncIfNeeded();
     if (s != Status::kOk) return s;
-    s = Exchange(pmd::Simple(static_cast<std::uint8_t>(axis), opcode), result_words, reply);
-    if (s == Status::kDisconnected) return s;
+    const pmd::Command get = pmd::Simple(static_cast<std::uint8_t>(axis), opcode);
+    s = Exchange(get, result_words, reply);
     if (s == Status::kOk && reply->status == pmd::status::kOk) return Status::kOk;
+    // A Get with a side effect (GetCaptureValue) may have run: it is asked again all the same.
+    Record(get, false);
+    if (s == Status::kDisconnected) return s;
     // A non-zero status on a Get may be a corrupted reply (a status byte that happens to match
     // the sum): resynchronise and ask again; a chip that keeps refusing is reported.
     last = s == Status::kOk ? Status::kRejected : s;
@@ -390,14 +398,24 @@ Status BiclopsHead::WriteRegister(int axis, Register r, std::int64_t value) {
     // Lost or garbled reply: executed or not? Resynchronise and read the register back.
     known.known = false;
     need_sync_ = true;
-    if (s == Status::kDisconnected) return s;
-    ++counters_.readbacks;
     std::int64_t now = 0;
-    s = ReadRegister(axis, r, &now);
-    if (s != Status::kOk) return s;
+    if (s != Status::kDisconnected) {
+      ++counters_.readbacks;
+      s = ReadRegister(axis, r, &now);
+    }
+    if (s != Status::kOk) {
+      Record(command, false);  // its outcome unknown
+      return s;
+    }
     known = {true, now};
-    if (now == value) return Status::kOk;         // executed, once
-    if (now != before) return Status::kBadReply;  // changed by something else
+    if (now == value) {
+      Record(command, true);  // executed, once
+      return Status::kOk;
+    }
+    if (now != before) {
+      Record(command, false);
+      return Status::kBadReply;  // changed by something else
+    }
     ++counters_.resends;                          // not executed: safe to send again
   }
   return Status::kBadReply;
@@ -441,6 +459,7 @@ Status BiclopsHead::UpdateTo(int axis, std::int64_t target) {
     if (s == Status::kOk && reply.status == pmd::status::kOk) {
       active.value = target;
       at_rest_[Index(axis)] = false;
+      rest_known_[Index(axis)] = false;
       return Status::kOk;
     }
     if (s == Status::kOk) {
@@ -450,22 +469,36 @@ Status BiclopsHead::UpdateTo(int axis, std::int64_t target) {
       continue;
     }
     // Lost or garbled reply: did the Update happen?
+    const pmd::Command update = pmd::Update(static_cast<std::uint8_t>(axis));
     active.known = false;
     at_rest_[Index(axis)] = false;
+    rest_known_[Index(axis)] = false;
     need_sync_ = true;
-    if (s == Status::kDisconnected) return s;
+    if (s == Status::kDisconnected) {
+      Record(update, false);
+      return s;
+    }
     ++counters_.update_checks;
     pmd::Reply status_reply;
     s = Query(axis, pmd::op::kGetActivityStatus, 1, &status_reply);
-    if (s != Status::kOk) return s;
-    if (from_rest && (status_reply.words[0] & pmd::activity::kInMotion) != 0) {
+    if (s == Status::kOk && from_rest && (status_reply.words[0] & pmd::activity::kInMotion) != 0) {
       active = {true, target};  // only an Update starts a profile on an axis at rest
+      Record(update, true);
       return Status::kOk;
     }
-    s = ResolveActive(axis);  // the profile ends on the new target or the old one
-    if (s != Status::kOk) return s;
-    if (active.value == target) return Status::kOk;
-    if (active.value != before) return Status::kBadReply;
+    if (s == Status::kOk) s = ResolveActive(axis);  // it ends on the new target or the old one
+    if (s != Status::kOk) {
+      Record(update, false);
+      return s;
+    }
+    if (active.value == target) {
+      Record(update, true);
+      return Status::kOk;
+    }
+    if (active.value != before) {
+      Record(update, false);
+      return Status::kBadReply;
+    }
     ++counters_.resends;
   }
   return Status::kBadReply;
@@ -524,6 +557,14 @@ Status BiclopsHead::Read(device::HeadState* state) {
   double q[3];
   bool moving = false;
   for (int a = 0; a < 3; ++a) {
+    // An axis seen at rest with no profile started since stays where it was read (only this
+    // driver starts profiles, and the chip's servo holds the position): nothing to ask. A head
+    // at rest reads at no cost, which keeps a 9600-baud line (six exchanges, 56 ms, for a full
+    // reading) from limiting the cameras' frame rate to half of 25 frames/s.
+    if (at_rest_[Index(a)] && rest_known_[Index(a)]) {
+      q[a] = rest_q_[Index(a)];
+      continue;
+    }
     // The status first, then the position: an axis seen at rest stays there (only this driver
     // starts profiles), so the position read after it is where the axis stopped. The other way
     // round, a profile that ends between the two replies (one 9600-baud exchange takes 10 ms)
@@ -536,6 +577,8 @@ Status BiclopsHead::Read(device::HeadState* state) {
     if (s != Status::kOk) return Fail(s);
     q[a] = static_cast<double>(pmd::ReplyLong(reply)) / options_.axes[Index(a)].counts_per_rad;
     at_rest_[Index(a)] = !in_motion;
+    rest_known_[Index(a)] = !in_motion;
+    rest_q_[Index(a)] = q[a];
     moving = moving || in_motion;
   }
   const Clock::time_point t1 = Clock::now();
@@ -600,6 +643,16 @@ Status BiclopsHead::Failed(int axis, const std::string& step, Status s) {
   return s;
 }
 
+void BiclopsHead::Record(const pmd::Command& command, bool executed) {
+  const pmd::OpcodeInfo* info = pmd::FindOpcode(command.opcode);
+  if (info == nullptr || !info->changes_state) return;
+  if (executed) {
+    command_log_.Executed(command);
+  } else {
+    command_log_.Unconfirmed(command);
+  }
+}
+
 Status BiclopsHead::Command(const pmd::Command& command) {
   // Configuration Set*s write the same value however often they arrive: a lost or garbled
   // reply is answered by sending the command again.
@@ -609,6 +662,8 @@ Status BiclopsHead::Command(const pmd::Command& command) {
     if (s != Status::kOk) return s;
     pmd::Reply reply;
     s = Exchange(command, 0, &reply);
+    // Lost or garbled: the chip may have executed it; it is sent again without asking.
+    if (s != Status::kOk) Record(command, false);
     if (s == Status::kDisconnected) return s;
     if (s == Status::kOk && reply.status == pmd::status::kOk) return Status::kOk;
     need_sync_ = true;
@@ -672,42 +727,58 @@ Status BiclopsHead::ConfigureAxis(int axis) {
     if (s != Status::kOk) return Failed(axis, name, s);
   }
   // The filter takes effect at an Update (libPMD SetFilter); the motor then goes on.
-  s = HomingUpdate(axis, here);
+  s = HomingUpdate(axis, here, /*at_target=*/true);
   if (s != Status::kOk) return Failed(axis, "Update (filter)", s);
   s = Command(pmd::WithWord(a, pmd::op::kSetMotorMode, pmd::kMotorOn));
   if (s != Status::kOk) return Failed(axis, "SetMotorMode on", s);
   return Status::kOk;
 }
 
-Status BiclopsHead::UpdateOnce(int axis, const std::function<Status(bool*)>& took) {
+Status BiclopsHead::UpdateOnce(int axis, const std::function<Status(bool*, bool*)>& took) {
   const auto a = static_cast<std::uint8_t>(axis);
   for (int attempt = 0; attempt <= options_.max_resends; ++attempt) {
     Status s = SyncIfNeeded();
     if (s != Status::kOk) return s;
     pmd::Reply reply;
     s = Exchange(pmd::Update(a), 0, &reply);
-    if (s == Status::kDisconnected) return s;
+    if (s == Status::kDisconnected) {
+      Record(pmd::Update(a), false);
+      return s;
+    }
     if (s == Status::kOk && reply.status == pmd::status::kOk) return Status::kOk;
     need_sync_ = true;
     if (s == Status::kOk && !pmd::StatusNeedsResync(reply.status)) return Status::kRejected;
-    if (silent_) return Status::kTimeout;
+    if (silent_) {
+      if (s != Status::kOk) Record(pmd::Update(a), false);
+      return Status::kTimeout;
+    }
     if (s != Status::kOk) {
       ++counters_.update_checks;
-      bool executed = false;
-      s = took(&executed);
-      if (s != Status::kOk) return s;
-      if (executed) return Status::kOk;
+      bool executed = false, sure = true;
+      s = took(&executed, &sure);
+      if (s != Status::kOk) {
+        Record(pmd::Update(a), false);
+        return s;
+      }
+      if (executed) {
+        Record(pmd::Update(a), sure);
+        return Status::kOk;
+      }
     }
     ++counters_.resends;
   }
   return Status::kBadReply;
 }
 
-Status BiclopsHead::HomingUpdate(int axis, std::int32_t target) {
+Status BiclopsHead::HomingUpdate(int axis, std::int32_t target, bool at_target) {
   // Re-sending an Update of the same buffered profile aims the axis at the same target again;
-  // still, it is re-sent only when the chip shows it did not take the first: not moving, and
-  // its commanded position not at the target.
-  return UpdateOnce(axis, [this, axis, target](bool* executed) {
+  // still, it is re-sent only when the chip shows it did not take the first: not moving, no
+  // motion event since the events were reset before it (a sweep that a capture breakpoint
+  // stopped short of its target ends with one: without this check such an Update was taken
+  // as lost and sent again, and the axis swept on to the target), and its commanded position
+  // not at the target. (An axis that stood at the target already, its motor off, shows the
+  // same either way: the Update is then taken as done, its execution unconfirmed.)
+  const auto took = [this, axis, target, at_target](bool* executed, bool* sure) {
     pmd::Reply reply;
     Status s = Query(axis, pmd::op::kGetActivityStatus, 1, &reply);
     if (s != Status::kOk) return s;
@@ -715,11 +786,21 @@ Status BiclopsHead::HomingUpdate(int axis, std::int32_t target) {
       *executed = true;
       return Status::kOk;
     }
+    s = Query(axis, pmd::op::kGetEventStatus, 1, &reply);
+    if (s != Status::kOk) return s;
+    constexpr std::uint16_t kMotionEvents =
+        pmd::event::kMotionComplete | pmd::event::kCaptureReceived | pmd::event::kBreakpoint1;
+    if ((reply.words[0] & kMotionEvents) != 0) {
+      *executed = true;
+      return Status::kOk;
+    }
     s = Query(axis, pmd::op::kGetCommandedPosition, 2, &reply);
     if (s != Status::kOk) return s;
     *executed = pmd::ReplyLong(reply) == target;
+    *sure = !at_target;
     return Status::kOk;
-  });
+  };
+  return UpdateOnce(axis, took);
 }
 
 Status BiclopsHead::HomingMove(int axis, std::int32_t target, int capture, bool* captured,
@@ -761,7 +842,7 @@ Status BiclopsHead::HomingMove(int axis, std::int32_t target, int capture, bool*
   s = Command(pmd::SetVelocity(a, static_cast<std::int32_t>(vel_reg)));
   if (s == Status::kOk) s = Command(pmd::SetAcceleration(a, static_cast<std::uint32_t>(acc_reg)));
   if (s == Status::kOk) s = Command(pmd::SetPosition(a, target));
-  if (s == Status::kOk) s = HomingUpdate(axis, target);
+  if (s == Status::kOk) s = HomingUpdate(axis, target, /*at_target=*/distance == 0.0);
   if (s != Status::kOk) return s;
   // The sweep's duration at the registers' speed and acceleration, and a margin.
   const double v_real = vel_reg / pmd::kVelocityScale / cycle_s_;
@@ -804,24 +885,41 @@ Status BiclopsHead::AdjustPosition(int axis, std::int32_t delta) {
   Status s = Query(axis, pmd::op::kGetActualPosition, 2, &reply);
   if (s != Status::kOk) return s;
   const std::int64_t before = pmd::ReplyLong(reply);
+  const pmd::Command adjust =
+      pmd::WithLong(a, pmd::op::kAdjustActualPosition, static_cast<std::uint32_t>(delta));
   for (int attempt = 0; attempt <= options_.max_resends; ++attempt) {
     s = SyncIfNeeded();
     if (s != Status::kOk) return s;
-    s = Exchange(
-        pmd::WithLong(a, pmd::op::kAdjustActualPosition, static_cast<std::uint32_t>(delta)), 0,
-        &reply);
-    if (s == Status::kDisconnected) return s;
+    s = Exchange(adjust, 0, &reply);
+    if (s == Status::kDisconnected) {
+      Record(adjust, false);  // its outcome unknown
+      return s;
+    }
     if (s == Status::kOk && reply.status == pmd::status::kOk) return Status::kOk;
     need_sync_ = true;
     if (s == Status::kOk && !pmd::StatusNeedsResync(reply.status)) return Status::kRejected;
-    if (silent_) return Status::kTimeout;
+    if (silent_) {
+      if (s != Status::kOk) Record(adjust, false);
+      return Status::kTimeout;
+    }
     if (s != Status::kOk) {
       ++counters_.readbacks;
       s = Query(axis, pmd::op::kGetActualPosition, 2, &reply);
-      if (s != Status::kOk) return s;
+      if (s != Status::kOk) {
+        Record(adjust, false);
+        return s;
+      }
       const std::int64_t now = pmd::ReplyLong(reply);
-      if (std::abs(now - (before + delta)) <= 2) return Status::kOk;  // executed, once
-      if (std::abs(now - before) > 2) return Status::kBadReply;       // moved: unclear
+      if (std::abs(now - (before + delta)) <= 2) {
+        // Executed, once; a shift of less than the read-back's tolerance cannot be told from
+        // none.
+        Record(adjust, std::abs(delta) > 2);
+        return Status::kOk;
+      }
+      if (std::abs(now - before) > 2) {
+        Record(adjust, false);
+        return Status::kBadReply;  // moved: unclear
+      }
     }
     ++counters_.resends;
   }
@@ -911,7 +1009,7 @@ Status BiclopsHead::HomeAxis(int axis) {
 
 Status BiclopsHead::StopUpdate(int axis) {
   // The Update consumes the stop: a stop mode of 0 means it was executed.
-  return UpdateOnce(axis, [this, axis](bool* executed) {
+  return UpdateOnce(axis, [this, axis](bool* executed, bool* /*sure*/) {
     pmd::Reply reply;
     const Status s = Query(axis, pmd::op::kGetStopMode, 1, &reply);
     if (s == Status::kOk) *executed = reply.words[0] == pmd::kNoStop;
@@ -929,6 +1027,7 @@ Status BiclopsHead::Stop() {
     // The axis ends wherever it stopped: its active target is read again before the next move.
     active_target_[Index(a)] = Known{};
     at_rest_[Index(a)] = false;
+    rest_known_[Index(a)] = false;
     if (s != Status::kOk) return Fail(s);
   }
   return Status::kOk;
@@ -956,6 +1055,7 @@ Status BiclopsHead::ConfigureAndHome(const StopRequest* stop) {
     for (auto& axis : reg_) axis.fill(Known{});
     active_target_.fill(Known{});
     at_rest_.fill(false);
+    rest_known_.fill(false);
   };
   forget();
   for (int a = 0; a < 3; ++a) {
@@ -1001,17 +1101,25 @@ Status BiclopsHead::ResetChip() {
     ++counters_.readbacks;
     std::int64_t velocity = 0;
     s = ReadRegister(0, kVelocity, &velocity);
-    if (s != Status::kOk) return Fail(s);
+    if (s != Status::kOk) {
+      Record(pmd::Reset(), false);
+      return Fail(s);
+    }
     if (velocity == 0) {
+      Record(pmd::Reset(), true);
       // Reset: every register is at its power-up value; read them again before use.
       initialized_ = false;
       homed_ = false;
       for (auto& axis : reg_) axis.fill(Known{});
       active_target_.fill(Known{});
       at_rest_.fill(false);
+      rest_known_.fill(false);
       return Status::kOk;
     }
-    if (velocity != velocity_reg_[0]) return Fail(Status::kBadReply);
+    if (velocity != velocity_reg_[0]) {
+      Record(pmd::Reset(), false);
+      return Fail(Status::kBadReply);
+    }
     ++counters_.resends;
   }
   return Fail(Status::kBadReply);

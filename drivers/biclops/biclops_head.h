@@ -28,6 +28,7 @@
 #include "common/stop_request.h"
 #include "device/head.h"
 #include "serial/byte_link.h"
+#include "serial/command_log.h"
 
 namespace hgrasp::drivers {
 
@@ -175,6 +176,20 @@ class BiclopsHead final : public device::Head {
   /// `target` in encoder counts, as MoveTo sends it.
   std::array<std::int32_t, 3> ToCounts(const device::HeadJoints& target) const;
   BiclopsCounters counters() const;
+  /// The state-changing commands (pmd::OpcodeInfo::changes_state: Set*, Update,
+  /// AdjustActualPosition, Reset, GetCaptureValue) sent to the chip, in order, as sent; the
+  /// chip's log (BiclopsEmulator::executed) gives each as {axis, opcode, pmd::CommandValue}.
+  /// Confirmed when the driver knows a command took effect: a clean status-0 reply, or, after
+  /// a lost or garbled reply, the register read back (WriteRegister, AdjustPosition, ResetChip)
+  /// or the profile's end (the Updates); a command the chip refused, or that the read-back
+  /// shows it never got, is not recorded. Unconfirmed: every send of a configuration Set*
+  /// (Command) or of GetCaptureValue (Query) whose reply was lost or garbled, since those are
+  /// sent again without asking whether the chip took them (they write the same value again:
+  /// when only the reply was damaged, the chip executed the command twice in a row, which its
+  /// log shows and this one shows as one unconfirmed entry and one confirmed); an Update to
+  /// the target an axis already stands at whose reply was lost (the chip shows the same
+  /// whether it ran or not); any command whose outcome a failure left unknown.
+  const CommandLog<pmd::Command>& command_log() const { return command_log_; }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -216,10 +231,14 @@ class BiclopsHead final : public device::Head {
   device::Status Command(const pmd::Command& command);
   device::Status ConfigureAxis(int axis);
   /// Sends one Update to `axis`; after an unclear reply `took` says whether the chip executed
-  /// it (then it is not sent again), else it is re-sent (at most max_resends times).
-  device::Status UpdateOnce(int axis, const std::function<device::Status(bool*)>& took);
+  /// it (then it is not sent again), else it is re-sent (at most max_resends times). `took`
+  /// clears its second argument when the chip would show the same had the Update never
+  /// arrived (the Update is then recorded unconfirmed).
+  device::Status UpdateOnce(int axis,
+                            const std::function<device::Status(bool*, bool*)>& took);
   /// An Update during homing: re-sent only when the chip shows it did not take it.
-  device::Status HomingUpdate(int axis, std::int32_t target);
+  /// `at_target`: the axis stands at `target` already.
+  device::Status HomingUpdate(int axis, std::int32_t target, bool at_target);
   /// One homing sweep to `target` counts; with `capture` (kCaptureIndex or kCaptureHome, or -1
   /// for none) it stops smoothly at the first capture: *captured and *capture_counts.
   device::Status HomingMove(int axis, std::int32_t target, int capture, bool* captured,
@@ -230,6 +249,9 @@ class BiclopsHead final : public device::Head {
   /// The Update that executes a pending stop, never twice (a second would restart the profile).
   device::Status StopUpdate(int axis);
   device::Status Failed(int axis, const std::string& step, device::Status s);
+  /// Records a state-changing command in command_log_: `executed` (confirmed), or sent and
+  /// perhaps executed (unconfirmed). Other commands are not recorded.
+  void Record(const pmd::Command& command, bool executed);
 
   std::unique_ptr<ByteLink> link_;
   BiclopsOptions options_;
@@ -242,6 +264,10 @@ class BiclopsHead final : public device::Head {
   std::array<std::array<Known, kRegisters>, 3> reg_{};  ///< buffered registers per axis
   std::array<Known, 3> active_target_{};                ///< the profile's target per axis
   std::array<bool, 3> at_rest_{};                       ///< seen at rest, and no Update sent since
+  /// Where Read last found each axis at rest (rad), valid while at_rest_ holds and
+  /// rest_known_ says Read saw it (homing and resyncs set at_rest_ without a position).
+  std::array<double, 3> rest_q_{};
+  std::array<bool, 3> rest_known_{};
   std::uint16_t version_chip_ = 0, version_software_ = 0;
   double cycle_s_ = 0.0;
   std::array<std::int32_t, 3> velocity_reg_{};
@@ -252,6 +278,7 @@ class BiclopsHead final : public device::Head {
   bool homed_ = false;
   const StopRequest* stop_ = nullptr;  ///< during ConfigureAndHome
   std::string last_error_;
+  CommandLog<pmd::Command> command_log_;
 };
 
 }  // namespace hgrasp::drivers

@@ -122,6 +122,8 @@ const std::vector<Field<Val2Options>>& Val2Fields() {
       {"confirm_reads", &O::confirm_reads, 0, 0, false, "whether reads are confirmed twice"},
       {"max_joint_speed_deg_s", &O::max_joint_speed_deg_s, 0, 3600, true,
        "joint speed limits (deg/s)"},
+      {"still_deg", &O::still_deg, 0, 10, true,
+       "the joint change between reads that counts as motion (deg)"},
   };
   return t;
 }
@@ -238,6 +240,12 @@ const std::vector<Field<GstCameraConfig>>& GstreamerFields() {
   static const std::vector<Field<O>> t = {
       {"width", &O::width, 16, 8192, false, "each frame's width (px)"},
       {"height", &O::height, 16, 8192, false, "each frame's height (px)"},
+      {"frame_timeout_s", &O::frame_timeout_s, 0.0, 10.0, true,
+       "the longest wait for a camera's next frame (s)"},
+      {"frame_offset", &O::frame_offset, -100000, 100000, false,
+       "the board's frame number minus the buffer offset (frames)"},
+      {"frames_in_flight", &O::frames_in_flight, 0, 25, false,
+       "frames that may arrive exposed before a command (frames)"},
   };
   return t;
 }
@@ -348,7 +356,23 @@ DeviceConfig ParseDevice(const Reader& r, const YAML::Node& n, std::string_view 
     g.cameras.right = r.Text(r.Require(e, n, field, "right", pipe_expected),
                              Join(field, "right"), pipe_expected);
     if (const YAML::Node* o = Reader::Find(e, "options")) {
-      ParseOptions(r, *o, options_field, GstreamerFields(), "the GStreamer cameras", &g.cameras);
+      Entries extra;
+      ParseOptions(r, *o, options_field, GstreamerFields(), "the GStreamer cameras", &g.cameras,
+                   {"latch_pairing"}, &extra);
+      if (const YAML::Node* p = Reader::Find(extra, "latch_pairing")) {
+        const std::string pairing_field = Join(options_field, "latch_pairing");
+        const std::string pairing_expected =
+            "which board latch goes with a frame: latest (the newest at grab time) or offset "
+            "(the latch of board frame = the buffer offset + frame_offset)";
+        const std::string pairing = r.Text(*p, pairing_field, pairing_expected);
+        if (pairing == "latest") {
+          g.cameras.latch_pairing = LatchPairing::kLatest;
+        } else if (pairing == "offset") {
+          g.cameras.latch_pairing = LatchPairing::kOffset;
+        } else {
+          r.Fail(*p, pairing_field, pairing_expected);
+        }
+      }
     }
     d.backend = g;
     return d;

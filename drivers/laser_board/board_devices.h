@@ -25,6 +25,8 @@ class BoardStripeLaser final : public device::StripeLaser {
   device::Status MoveTo(std::int32_t count, double speed_counts_s) override;
   /// SET_MOTOR_VELOCITY 0: the motor stops where it is.
   device::Status Stop() override;
+  /// The board (shared with the LEDs and the cameras' latches).
+  const std::shared_ptr<LaserBoard>& board() const { return board_; }
 
  private:
   std::shared_ptr<LaserBoard> board_;
@@ -38,6 +40,8 @@ class BoardLeds final : public device::Leds {
 
   int Count(device::Side side) const override;
   device::Status Set(device::Side side, std::uint32_t mask) override;
+  /// The board (shared with the laser and the cameras' latches).
+  const std::shared_ptr<LaserBoard>& board() const { return board_; }
 
  private:
   std::shared_ptr<LaserBoard> board_;

@@ -155,13 +155,20 @@ Status LaserBoard::Transact(const lb::Command& command, lb::Reply* reply) {
   // one we sent it with): send it with the same number, and the board answers from memory.
   // Anything else is a new command with a new number.
   std::uint8_t seq;
+  std::optional<CommandLog<lb::Command>::Id> logged;  // its place in command_log_
   if (pending_ && *pending_ == command && pending_seq_ == seq_) {
     seq = pending_seq_;
+    logged = pending_logged_;
     ++stats_.replayed;
   } else {
     seq = NextSeq(seq_);
+    // Not the failed command's retry: its outcome is known now (a pending command implies the
+    // sync above). Its number the board's last, it ran (or was refused); else it never came.
+    if (pending_logged_) command_log_.Resolve(*pending_logged_, pending_seq_ == seq_);
+    if (lb::ChangesState(command)) logged = command_log_.Sent(command);
   }
   pending_.reset();
+  pending_logged_.reset();
   seq_ = seq;
 
   const Status s = Exchange(seq, command, deadline, reply);
@@ -169,10 +176,12 @@ Status LaserBoard::Transact(const lb::Command& command, lb::Reply* reply) {
     // Outcome unknown: learn the board's last number before the next command.
     pending_ = command;
     pending_seq_ = seq;
+    pending_logged_ = logged;
     unsure_ = true;
     ++stats_.failures;
     return s;
   }
+  if (logged) command_log_.Resolve(*logged, reply->ack);
   if (!reply->ack) {
     ++stats_.failures;  // the caller gets kRejected
     // The board's memory and ours disagree (cannot happen with this driver alone): resync.

@@ -23,6 +23,7 @@
 #include "device/status.h"
 #include "laser_board/laser_board_codec.h"
 #include "serial/byte_link.h"
+#include "serial/command_log.h"
 #include "serial/serial_port.h"
 
 namespace hgrasp::drivers {
@@ -88,6 +89,17 @@ class LaserBoard {
   int LedCount(device::Side side) const { return options_.leds_per_gripper; }
   const LaserBoardOptions& options() const { return options_; }
   LaserBoardStats stats() const;
+  /// The state-changing commands (laser_board::ChangesState) the board executed, in order,
+  /// each once: the board's own log (LaserBoardEmulator::log) as laser_board::CodeOf and
+  /// CommandPayload give them. Confirmed at the command's ACK (a retransmission's ACK comes
+  /// from the board's memory: still once); a NAK removes it. A failed command whose answer was
+  /// lost: confirmed when the sync before the next command shows the board's last sequence
+  /// number to be the one it was sent with and the next command is not its retry (a retry is
+  /// answered from the board's memory, and judged by that answer), removed when the number is
+  /// another. (The board also takes the number of a command it refuses, a value outside its
+  /// limits: such a command, its NAK lost and not retried, is confirmed although it did not
+  /// run.) A failed command that nothing follows stays unconfirmed.
+  const CommandLog<laser_board::Command>& command_log() const { return command_log_; }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -118,8 +130,10 @@ class LaserBoard {
   /// The command whose outcome is unknown (it failed), and the number it was sent with.
   std::optional<laser_board::Command> pending_;
   std::uint8_t pending_seq_ = 0;
+  std::optional<CommandLog<laser_board::Command>::Id> pending_logged_;  ///< its log entry
   std::uint8_t token_ = 0;  ///< the last GET_STATUS token sent
   LaserBoardStats stats_;
+  CommandLog<laser_board::Command> command_log_;
 };
 
 }  // namespace hgrasp::drivers

@@ -293,6 +293,7 @@ void SensorHandHand::HandleSample(const DumpSample& d, Clock::time_point now) {
       // arrived whole. Safe to send again.
       ++stats_.lost;
       last_lost_ = pending_->cmd;
+      command_log_.Resolve(pending_->logged, false);
       pending_.reset();
     }
     return;
@@ -353,6 +354,7 @@ void SensorHandHand::ResolveExecuted(double t_exec_s, double uncertainty_s) {
   }
   estimator_ = e;
   executed_.push_back(p.cmd);
+  command_log_.Resolve(p.logged, true);
   ++stats_.executed;
   acked_goal_id_ = std::max(acked_goal_id_, p.goal_id);
   known_ = p.cmd;
@@ -367,6 +369,7 @@ void SensorHandHand::Step(Clock::time_point now, std::vector<std::uint8_t>* out)
   if (send_dump_stop_) {
     const auto stop = sensorhand::EncodeDumpStop();
     out->insert(out->end(), stop.begin(), stop.end());
+    command_log_.Unconfirmed({sensorhand::Command::Kind::kDumpStop, {}});  // no echo awaited
     send_dump_stop_ = false;
     dump_stopped_ = true;
     return;
@@ -377,6 +380,7 @@ void SensorHandHand::Step(Clock::time_point now, std::vector<std::uint8_t>* out)
     // it. 0x73 only switches the stream on; sent again it changes nothing.
     const auto start = sensorhand::EncodeDumpStart();
     out->insert(out->end(), start.begin(), start.end());
+    command_log_.Unconfirmed({sensorhand::Command::Kind::kDumpStart, {}});  // no echo awaited
     last_stream_start_ = now;
     ++stats_.stream_starts;
   }
@@ -429,6 +433,7 @@ void SensorHandHand::Step(Clock::time_point now, std::vector<std::uint8_t>* out)
   p.at_write = estimator_;
   p.before_settled = known_shown_ && Consistent(known_, Classify(history_.back().d.state));
   p.goal_id = goal_.id;
+  p.logged = command_log_.Sent({sensorhand::Command::Kind::kSpeed, want});
   pending_ = std::move(p);
   if (last_lost_ && *last_lost_ == want) ++stats_.resends;
   last_lost_.reset();

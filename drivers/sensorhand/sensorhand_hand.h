@@ -38,6 +38,7 @@
 #include "sensorhand/opening_estimator.h"
 #include "sensorhand/sensorhand_codec.h"
 #include "serial/byte_link.h"
+#include "serial/command_log.h"
 #include "serial/serial_port.h"
 
 namespace hgrasp::drivers {
@@ -165,6 +166,14 @@ class SensorHandHand final : public device::Hand {
   std::vector<sensorhand::SpeedSetting> executed() const;
   /// Commands whose outcome the driver never learnt (unresolved_s), in order.
   std::vector<sensorhand::SpeedSetting> unresolved() const;
+  /// The commands the driver sent the hand, in the order sent, as sensorhand::Encode frames
+  /// them (the encoding of SensorHandEmulator::log). A speed setting is confirmed once the
+  /// driver sees it executed (executed(): by its echo or the stream), removed when the stream
+  /// shows it lost, unconfirmed while neither (or never: unresolved()). The stream's start
+  /// (0x73, sent again every kStreamRetryS while the stream is silent: a start of a running
+  /// stream changes nothing) and stop (0x7A, at destruction) are unconfirmed: their echoes are
+  /// not awaited.
+  const CommandLog<sensorhand::Command>& command_log() const { return command_log_; }
   SensorHandEstimate estimate() const;
   SensorHandStats stats() const;
 
@@ -207,6 +216,7 @@ class SensorHandHand final : public device::Hand {
     int votes_new = 0, votes_old = 0;       ///< samples that show either setting
     bool before_settled = false;  ///< the newest sample before it already showed `before`
     std::uint64_t goal_id = 0;
+    CommandLog<sensorhand::Command>::Id logged = 0;  ///< its entry in command_log_
   };
   struct Sample {
     sensorhand::DumpSample d;
@@ -279,6 +289,7 @@ class SensorHandHand final : public device::Hand {
   std::uint64_t next_goal_id_ = 1;
   std::uint64_t acked_goal_id_ = 0;  ///< the newest goal whose first command the hand took
   std::vector<sensorhand::SpeedSetting> executed_, unresolved_;
+  CommandLog<sensorhand::Command> command_log_;
   SensorHandStats stats_;
   std::thread thread_;
 };

@@ -3,7 +3,9 @@
 namespace hgrasp::drivers {
 
 FaultyLink::FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan)
-    : inner_(std::move(inner)), plan_(plan), rng_(plan.seed) {
+    : inner_(std::move(inner)), faults_(plan) {}
+
+LineFaults::LineFaults(const FaultPlan& plan) : plan_(plan), rng_(plan.seed) {
   const Clock::time_point now = Clock::now();
   dropout_end_ = now;
   next_dropout_ = now;
@@ -14,22 +16,22 @@ FaultyLink::FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan)
   }
 }
 
-void FaultyLink::Cut(bool cut) {
+void LineFaults::Cut(bool cut) {
   std::lock_guard<std::mutex> lock(mu_);
   cut_ = cut;
 }
 
-void FaultyLink::CutFromDevice(bool cut) {
+void LineFaults::CutFromDevice(bool cut) {
   std::lock_guard<std::mutex> lock(mu_);
   cut_from_device_ = cut;
 }
 
-FaultCounts FaultyLink::counts() const {
+FaultCounts LineFaults::counts() const {
   std::lock_guard<std::mutex> lock(mu_);
   return counts_;
 }
 
-bool FaultyLink::InDropout(Clock::time_point now) {
+bool LineFaults::InDropout(Clock::time_point now) {
   if (plan_.dropouts_per_s <= 0.0) return false;
   while (now >= next_dropout_) {
     dropout_end_ = next_dropout_ + std::chrono::duration_cast<Clock::duration>(
@@ -42,8 +44,13 @@ bool FaultyLink::InDropout(Clock::time_point now) {
   return now < dropout_end_;
 }
 
-void FaultyLink::Damage(std::span<const std::uint8_t> in, bool from_device,
-                        std::vector<std::uint8_t>* out) {
+bool LineFaults::cut() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return cut_;
+}
+
+void LineFaults::Pass(std::span<const std::uint8_t> in, bool from_device,
+                      std::vector<std::uint8_t>* out) {
   std::lock_guard<std::mutex> lock(mu_);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::uniform_int_distribution<int> other(1, 255), any(0, 255);
@@ -69,7 +76,7 @@ void FaultyLink::Damage(std::span<const std::uint8_t> in, bool from_device,
 device::Status FaultyLink::Write(std::span<const std::uint8_t> bytes) {
   std::vector<std::uint8_t> out;
   out.reserve(bytes.size() + 4);
-  Damage(bytes, /*from_device=*/false, &out);
+  faults_.Pass(bytes, /*from_device=*/false, &out);
   if (out.empty()) return device::Status::kOk;  // lost on the wire: the sender cannot tell
   return inner_->Write(out);
 }
@@ -87,7 +94,7 @@ device::Status FaultyLink::Read(std::span<std::uint8_t> buf, double timeout_s, s
     const device::Status s = inner_->Read(raw, std::max(left, 0.0), &got);
     if (s != device::Status::kOk) return s;
     std::vector<std::uint8_t> out;
-    Damage(std::span<const std::uint8_t>(raw.data(), got), /*from_device=*/true, &out);
+    faults_.Pass(std::span<const std::uint8_t>(raw.data(), got), /*from_device=*/true, &out);
     if (!out.empty()) {
       // Inserted bytes beyond the caller's buffer are dropped too (an overrun).
       *n = std::min(out.size(), buf.size());

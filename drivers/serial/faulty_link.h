@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "serial/byte_link.h"
@@ -30,6 +31,36 @@ struct FaultCounts {
   std::uint64_t dropouts = 0;   ///< dropouts begun
 };
 
+/// The faults of one serial line, without the line: what FaultyLink does to the bytes that pass
+/// it, for any code that moves bytes itself (the twin's device end of a line). Thread-safe.
+class LineFaults {
+ public:
+  explicit LineFaults(const FaultPlan& plan);
+
+  /// Passes `in` through the faults into *out (appended). `from_device`: the bytes travel from
+  /// the device to the host (the direction CutFromDevice cuts).
+  void Pass(std::span<const std::uint8_t> in, bool from_device, std::vector<std::uint8_t>* out);
+  /// Cuts the cable (every byte lost from now on) or mends it.
+  void Cut(bool cut);
+  /// Cuts only the device's transmit wire or mends it.
+  void CutFromDevice(bool cut);
+  bool cut() const;
+  FaultCounts counts() const;
+  const FaultPlan& plan() const { return plan_; }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  bool InDropout(Clock::time_point now);
+
+  FaultPlan plan_;
+  mutable std::mutex mu_;
+  std::mt19937_64 rng_;
+  bool cut_ = false;
+  bool cut_from_device_ = false;
+  Clock::time_point next_dropout_, dropout_end_;
+  FaultCounts counts_;
+};
+
 class FaultyLink final : public ByteLink {
  public:
   FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan);
@@ -39,26 +70,17 @@ class FaultyLink final : public ByteLink {
   void Discard() override { inner_->Discard(); }
 
   /// Cuts the cable (every byte lost from now on) or mends it.
-  void Cut(bool cut);
+  void Cut(bool cut) { faults_.Cut(cut); }
   /// Cuts only the device's transmit wire (what the device sends is lost, what the host sends
   /// still arrives: a broken receive line at the host) or mends it.
-  void CutFromDevice(bool cut);
-  FaultCounts counts() const;
+  void CutFromDevice(bool cut) { faults_.CutFromDevice(cut); }
+  FaultCounts counts() const { return faults_.counts(); }
 
  private:
   using Clock = std::chrono::steady_clock;
-  /// Passes `in` through the faults into *out.
-  void Damage(std::span<const std::uint8_t> in, bool from_device, std::vector<std::uint8_t>* out);
-  bool InDropout(Clock::time_point now);
 
   std::unique_ptr<ByteLink> inner_;
-  FaultPlan plan_;
-  mutable std::mutex mu_;
-  std::mt19937_64 rng_;
-  bool cut_ = false;
-  bool cut_from_device_ = false;
-  Clock::time_point next_dropout_, dropout_end_;
-  FaultCounts counts_;
+  LineFaults faults_;
 };
 
 }  // namespace hgrasp::drivers

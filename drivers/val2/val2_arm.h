@@ -34,6 +34,7 @@
 
 #include "device/arm.h"
 #include "serial/byte_link.h"
+#include "serial/command_log.h"
 #include "val2/val2_codec.h"
 
 namespace hgrasp::drivers {
@@ -58,6 +59,12 @@ struct Val2Options {
   bool confirm_reads = false;
   /// Joint speed limits (deg/s) for confirm_reads: the Puma 260's (DESIGN.md).
   std::array<double, 6> max_joint_speed_deg_s = {120, 120, 165, 575, 430, 400};
+  /// Read() calls the arm moving when a joint changed by more than this between two reads
+  /// (deg), or a motion was commanded since the last read. A position-servoed arm at rest under
+  /// load (a hand pressing on a box) dithers in WHERE's third decimal; with any change counted
+  /// as motion the arm of the twin never came to rest at the grasp. 0.01 deg is ten of WHERE's
+  /// units and moves the gripper (0.45 m of arm) by under 0.1 mm.
+  double still_deg = 0.01;
   /// When set, told every exchange with the controller (bytes sent, answer, what the driver
   /// made of it), for debugging a link.
   std::function<void(const std::string&)> trace;
@@ -109,6 +116,17 @@ class Val2Arm final : public device::Arm {
   /// The last message the controller printed between asterisks ("" when none yet).
   const std::string& last_error() const { return last_error_; }
   const Val2Counters& counters() const { return counters_; }
+  /// The state-changing lines the controller executed (SPEED, DO MOVE, DO APPRO, DO READY,
+  /// ABORT), each once, as val2::Encode spells them: the encoding of Val2Emulator's log
+  /// (Val2Executed::line). Confirmed when the driver knows a line ran: its execution seen, or,
+  /// for a failed call's line, found executed later (by the call's retry, a Read, the next
+  /// command or the recovery after a lost link); a line refused or cancelled is not recorded.
+  /// Unconfirmed (CommandLog): the ABORT that SafeStop types blind to a silent controller
+  /// (nothing answers it: the controller may have heard it or not; Stop() follows with a
+  /// confirmed ABORT), and, until a call succeeds after it, a line the driver finds gone from
+  /// the controller's input (its usual proof that the line ran), since the blind ^U may have
+  /// emptied the line instead. A failed call's line still unresolved is not recorded.
+  const CommandLog<std::string>& command_log() const { return command_log_; }
   /// True while the link counts as lost (see the file comment).
   bool link_lost() const { return lost_; }
 
@@ -163,6 +181,9 @@ class Val2Arm final : public device::Arm {
                             std::string* answer);
   /// Throws away bytes nobody asked for (late answers).
   device::Status DrainStale();
+  /// Records `line`, which ran, in command_log_; `inferred`: known from the line having gone
+  /// from the controller's input, not from its execution seen.
+  void Ran(const std::string& line, bool inferred);
   /// Bookkeeping of a failed call: silence, lost link. Returns the status to report.
   device::Status Fail(device::Status s);
   double Now() const;
@@ -193,6 +214,8 @@ class Val2Arm final : public device::Arm {
 
   std::string last_error_;
   Val2Counters counters_;
+  CommandLog<std::string> command_log_;
+  bool blind_typed_ = false;  // SafeStop typed ^U ABORT blind since the last call that succeeded
 };
 
 }  // namespace hgrasp::drivers

@@ -510,6 +510,11 @@ std::array<std::string, 4> FormatWhere(const WhereReport& r) {
   return lines;
 }
 
+bool ParseWhereJoints(const std::string& header, const std::string& values,
+                      std::array<double, 6>* joints) {
+  return header == Header(kJointLabels) && ParseFields(values, kJointDecimals, joints);
+}
+
 bool ParseWhere(const std::array<std::string, 4>& lines, WhereReport* report) {
   if (lines[0] != Header(kLocationLabels) || lines[2] != Header(kJointLabels)) return false;
   std::array<double, 6> loc, joints;

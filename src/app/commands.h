@@ -2,6 +2,7 @@
 /// @file The `hgrasp` subcommands. Each returns the process exit status: 0 success, 1 the task
 /// failed, 2 bad input or usage (DESIGN.md, "The command").
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -72,6 +73,9 @@ struct RunOptions {
   bool video = true;  ///< write left.avi, the left camera through the whole run
   /// As ModelOptions::lean (and no left.avi): report.json, segments.png, grasp.png, servo_*.png.
   bool lean = false;
+  /// Where to write the real drivers' command logs (app::CommandLogs) once the robot is left
+  /// safe; "" for none.
+  std::string command_log;
 };
 
 /// `hgrasp run`: the whole task (look, plan, approach, servo, close, lift): the outputs of
@@ -154,6 +158,23 @@ struct EmulateOptions {
   /// SIGINT or SIGTERM.
   std::optional<double> seconds;
 };
+
+struct TwinCommandOptions {
+  std::string scenario;
+  std::string dir = "/tmp/hgrasp-twin";  ///< the ports folder (pty links, devices.yaml, ...)
+  double rate = 1.0;                     ///< twin seconds per wall second, (0, 1]
+  std::optional<double> seconds;         ///< stop after this long (twin time); else at a signal
+  std::string camera_host = "127.0.0.1";
+  std::array<int, 2> camera_ports = {5600, 5601};  ///< TCP ports of the streams (0: any free)
+  double corrupt = 0.0;         ///< per byte and direction, on every serial line
+  double dropouts_per_s = 0.0;  ///< mean rate of dropouts on every serial line
+  double dropout_s = 0.2;       ///< length of a dropout (s)
+  std::vector<std::string> at;  ///< "SECONDS:COMMAND" (Twin::Control) at that twin time
+  std::string head_options;     ///< the Biclops driver's options in devices.yaml (YAML flow)
+};
+
+/// `hgrasp twin`: the twin behind the real wires (src/app/twin_command.cc).
+int Twin(const TwinCommandOptions& options);
 
 /// Longest --seconds (s): about 11.6 days.
 inline constexpr double kMaxEmulateSeconds = 1e6;

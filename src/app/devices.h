@@ -77,4 +77,14 @@ Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop = nullptr
 /// simulated), the others opened on their ports. Throws as OpenRobot.
 device::RobotDevices MakeDevices(const sim::Scenario& scenario, sim::SimRobot* twin);
 
+/// The command log (command_log()) of every device that is a real serial driver, keyed as the
+/// twin's serial lines (sim::kTwinLines: arm_left, arm_right, hand_left, hand_right, head,
+/// laser_board; the laser and the LEDs share the board's one log) and in the encoding of the
+/// twin's report (twin.json "commands"): VAL II lines as typed; SensorHand commands as the
+/// lowercase hex of their frames; Biclops commands as {"axis", "opcode", "value"}
+/// (pmd::CommandValue); laser board commands as the hex of their payload, "/", their code.
+/// An entry the driver cannot confirm (drivers/serial/command_log.h) is {"unconfirmed": ENTRY}.
+/// Simulated devices are left out.
+nlohmann::json CommandLogs(const device::RobotDevices& devices);
+
 }  // namespace hgrasp::app

@@ -160,6 +160,10 @@ int main(int argc, char** argv) {
   cmd_run->add_flag("--lean", run.lean,
                     "only report.json, segments.png, grasp.png and servo_*.png (as a sweep's "
                     "scenes; no video)");
+  cmd_run->add_option("--command-log", run.command_log,
+                      "write the state-changing commands each real driver had its device "
+                      "execute into FILE (JSON, keyed as the twin's twin.json \"commands\"), "
+                      "once the robot is left safe");
 
   hgrasp::app::GenerateOptions generate;
   std::string generate_seeds = "1";
@@ -233,6 +237,36 @@ int main(int argc, char** argv) {
   CLI::Option* emulate_seconds_option = cmd_emulate->add_option(
       "--seconds", emulate_seconds, "stop after this many seconds (> 0; default: at Ctrl-C)");
 
+  hgrasp::app::TwinCommandOptions twin;
+  CLI::App* cmd_twin = app.add_subcommand(
+      "twin",
+      "Run the scenario's world in wall-clock time and serve every device on its real wire: "
+      "serial devices on ptys in --dir, cameras as GStreamer streams; then `hgrasp run "
+      "DIR/scenario.yaml` runs through the real drivers against it. Stops at Ctrl-C");
+  cmd_twin->add_option("scenario", twin.scenario, "scenario YAML")->required();
+  cmd_twin->add_option("--dir", twin.dir,
+                       "folder for the ports' links, devices.yaml, scenario.yaml, world.xml, "
+                       "control and twin.json (default /tmp/hgrasp-twin)");
+  cmd_twin->add_option("--rate", twin.rate,
+                       "twin seconds per wall second, (0, 1]: below 1 for a slow machine");
+  double twin_seconds = 0.0;
+  CLI::Option* twin_seconds_option =
+      cmd_twin->add_option("--seconds", twin_seconds, "stop after this much twin time (s)");
+  cmd_twin->add_option("--camera-ports", twin.camera_ports,
+                       "TCP ports of the left and right streams on 127.0.0.1 (0: any free; "
+                       "default 5600 5601)");
+  cmd_twin->add_option("--corrupt", twin.corrupt,
+                       "fault: probability that a byte is corrupted, per byte and direction, on "
+                       "every serial line");
+  cmd_twin->add_option("--dropouts", twin.dropouts_per_s,
+                       "fault: mean dropouts per second on every serial line (both ways silent)");
+  cmd_twin->add_option("--dropout-s", twin.dropout_s, "fault: length of a dropout (s, default 0.2)");
+  cmd_twin->add_option("--at", twin.at,
+                       "SECONDS:COMMAND: run a control command at that twin time (repeatable): "
+                       "cut|cut_tx|mend|vanish|reappear DEVICE, stop|resume cameras");
+  cmd_twin->add_option("--head-options", twin.head_options,
+                       "the Biclops driver's options written into devices.yaml (YAML flow)");
+
   // A word where a command belongs that names none: said with the word and the commands (CLI11
   // would say only that a subcommand is required, or show the main help for `WORD --help`).
   if (const std::string unknown = UnknownCommand(app, argc, argv); !unknown.empty()) {
@@ -286,6 +320,10 @@ int main(int argc, char** argv) {
         sweep.shard = {static_cast<int>(index), static_cast<int>(count)};
       }
       return hgrasp::app::Sweep(sweep);
+    }
+    if (*cmd_twin) {
+      if (twin_seconds_option->count() > 0) twin.seconds = twin_seconds;
+      return hgrasp::app::Twin(twin);
     }
     if (*cmd_emulate) {
       if (emulate_seconds_option->count() > 0) emulate.seconds = emulate_seconds;

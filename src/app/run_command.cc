@@ -16,6 +16,7 @@
 #include "app/look_report.h"
 #include "app/output_dir.h"
 #include "app/pictures.h"
+#include "common/error.h"
 #include "common/write_file.h"
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
@@ -57,6 +58,26 @@ cv::Mat ServoPicture(const device::StereoFrame& frame, const task::TaskView& vie
   return picture;
 }
 
+// --command-log FILE: checked before the robot moves, so that a path that cannot be written is
+// a usage error (exit 2) and not a lost log after the run.
+void CheckCommandLogPath(const std::string& path) {
+  if (path.empty()) return;
+  const fs::path p(path);
+  const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!p.has_filename() || !fs::is_directory(folder, ec) || fs::is_directory(p, ec)) {
+    throw InputError("", "--command-log", path, "a file in an existing folder");
+  }
+}
+
+// The real drivers' command logs, written once the robot is left safe (what the drivers did
+// after that, their destructors' stops, is not in them).
+void WriteCommandLog(const std::string& path, const device::RobotDevices& devices) {
+  if (path.empty()) return;
+  WriteFileWhole(path, CommandLogs(devices).dump(1) + "\n");
+  spdlog::info("run: wrote the drivers' command logs to {}", path);
+}
+
 nlohmann::json ErrorJson(const servo::ServoError& e) {
   return {{"translation_m", e.translation_m}, {"rotation_deg", RadToDeg(e.rotation_rad)}};
 }
@@ -70,10 +91,14 @@ int Run(const RunOptions& o) {
   const task::RobotModel robot_model =
       task::LoadRobotModel(o.files.cameras, o.files.laser, o.files.leds);
   OutputDir out_dir(o.out_dir);
+  CheckCommandLogPath(o.command_log);
   const StopSignals signals;
   config.stop = signals.request();
   Robot robot = OpenRobot(scenario, signals.request());
-  if (EndedAtStart(robot, scenario, &out_dir, "run")) return 1;
+  if (EndedAtStart(robot, scenario, &out_dir, "run")) {
+    WriteCommandLog(o.command_log, robot.devices);
+    return 1;
+  }
   device::RobotDevices& dev = robot.devices;
   sim::SimRobot* const truth = robot.truth();  // null unless every device is simulated
   const bool sim_truth = truth != nullptr;
@@ -102,6 +127,9 @@ int Run(const RunOptions& o) {
     }
     WritePng(picture, (out / ("servo_" + std::string(view.moment) + ".png")).string());
     ++pictures;
+    // Said as it happens: a user watching the robot (or a test cutting a link during the servo)
+    // knows where the task is.
+    spdlog::info("run: {} (device time {:.2f} s)", view.moment, frame.t_s);
     if (sim_truth && task_ptr->result().plan && view.moment != "lifted") {
       // Where the gripper truly is against the planned pose it is servoed to: the pre-grasp
       // until it is reached, then the grasp.
@@ -137,8 +165,14 @@ int Run(const RunOptions& o) {
     }
   }
   const bool ok = planned && task.Approach() && task.Servo() && task.Close() && task.Lift();
+  if (!ok) {
+    // Said at once, before the safe stop (which may take a while on slow lines).
+    spdlog::warn("run: {} ({}): leaving the robot safe", task::ToString(task.result().failure),
+                 task.result().message);
+  }
   // Whatever happened, the robot is left safe before anything is written (DESIGN.md rule 8).
   const SafeStopReport safe = robot.LeaveSafe();
+  WriteCommandLog(o.command_log, dev);
   const task::TaskResult& r = task.result();
 
   nlohmann::json report = LookReport(scenario, look_truth ? &*look_truth : nullptr, r,

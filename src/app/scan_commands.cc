@@ -67,8 +67,18 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   scan::LaserCalibrationReport report;
   scan::SweepConfig sweep;
   sweep.stop = signals.request();
+  std::string aim_failed;
+  const device::Status aimed =
+      scan::MoveHeadForScan(dev, scan::kLookHead, sweep.stop, &aim_failed);
+  if (aimed != device::Status::kOk) {
+    report.status = aimed;
+    report.failed_device = aim_failed;
+    report.failure = aim_failed + ": " + std::string(device::ToString(aimed)) +
+                     " moving the head to the scan pose";
+  }
   const std::optional<robot::LaserCalibration> calibrated =
-      scan::CalibrateLaser(dev, head, cameras, sweep, {}, &report);
+      aimed == device::Status::kOk ? scan::CalibrateLaser(dev, head, cameras, sweep, {}, &report)
+                                   : std::nullopt;
   // The head's angles for the truth below are read before the safe stop.
   device::HeadState hs;
   const device::Status head_read = calibrated ? dev.head->Read(&hs) : device::Status::kOk;
@@ -128,7 +138,16 @@ int Scan(const ScanOptions& o) {
   scan::SweepConfig sweep;
   sweep.stop = signals.request();
   const auto t_scan = std::chrono::steady_clock::now();
-  const scan::ScanResult result = scanner.Scan(dev, sweep);
+  std::string aim_failed;
+  const device::Status aimed =
+      scan::MoveHeadForScan(dev, scan::kLookHead, sweep.stop, &aim_failed);
+  scan::ScanResult result;
+  if (aimed == device::Status::kOk) {
+    result = scanner.Scan(dev, sweep);
+  } else {
+    result.status = aimed;
+    result.failed_device = aim_failed;
+  }
   const double scan_s = Seconds(t_scan);
   const SafeStopReport safe = robot.LeaveSafe();
   if (result.status != device::Status::kOk) {

@@ -29,6 +29,10 @@ class StereoCamera {
   /// end): a camera that saves work by not making them leaves `left` and `right` empty (the
   /// simulator does not render them); by default it is Grab.
   virtual Status GrabWithoutImages(StereoFrame* frame) { return Grab(frame); }
+  /// Frames a Grab just after a command may return that were exposed before the command took
+  /// effect (the camera's latency, in frames): 0 for the lockstep simulation, where each Grab
+  /// exposes a new frame after every command before it.
+  virtual int frames_in_flight() const { return 0; }
 };
 
 }  // namespace hgrasp::device

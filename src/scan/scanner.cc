@@ -94,6 +94,50 @@ device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
   return device::Status::kOk;
 }
 
+device::Status MoveHeadForScan(device::RobotDevices& dev, const device::HeadJoints& q,
+                               const StopRequest* stop, std::string* failed,
+                               double tolerance_rad, int settle_frames, int timeout_frames) {
+  std::string ignored;
+  if (failed == nullptr) failed = &ignored;
+  device::HeadState head;
+  if (const auto st = dev.head->Read(&head); st != device::Status::kOk) {
+    *failed = "head";
+    return st;
+  }
+  if (std::abs(head.q.pan - q.pan) <= tolerance_rad &&
+      std::abs(head.q.tilt - q.tilt) <= tolerance_rad &&
+      std::abs(head.q.verge - q.verge) <= tolerance_rad) {
+    return device::Status::kOk;
+  }
+  if (const auto st = dev.head->MoveTo(q); st != device::Status::kOk) {
+    *failed = "head";
+    return st;
+  }
+  device::StereoFrame frame;
+  int still_frames = -1;  // frames since the head was seen still
+  for (int i = 0; i < timeout_frames; ++i) {
+    if (const auto st = dev.cameras->GrabWithoutImages(&frame); st != device::Status::kOk) {
+      *failed = "cameras";
+      return st;
+    }
+    if (StopRequested(stop)) {
+      *failed = "";
+      return device::Status::kInterrupted;
+    }
+    if (still_frames < 0) {
+      if (const auto st = dev.head->Read(&head); st != device::Status::kOk) {
+        *failed = "head";
+        return st;
+      }
+      if (!head.moving) still_frames = 0;
+    } else if (++still_frames >= settle_frames) {
+      return device::Status::kOk;
+    }
+  }
+  *failed = "head";
+  return device::Status::kTimeout;
+}
+
 void CheckFrameSize(const robot::StereoIntrinsics& cameras, const device::StereoFrame& frame) {
   const auto check = [&](const PinholeCamera& c, const cv::Mat& image, const char* side) {
     if (image.cols == c.width && image.rows == c.height) return;

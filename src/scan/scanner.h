@@ -19,6 +19,20 @@
 
 namespace hgrasp::scan {
 
+/// Where the head looks for a scan: both optical axes through the workspace's centre
+/// (0.30, 0, 0.05) m in W, as models/humanoid.xml's keyframe "home" (pan 0, tilt 41.390 deg,
+/// verge 6.693 deg). A real Biclops ends its homing at its index marks, looking ahead.
+inline constexpr device::HeadJoints kLookHead{0.0, 0.72238375471590055, 0.11681727844879244};
+
+/// Moves the head to `q` unless it stands within `tolerance_rad` of it on every axis, then
+/// waits with frames (grabbed without images) until it is still and `settle_frames` more.
+/// kOk, or the status that ended it with *failed_device ("head", "cameras"; "" for a stop
+/// request: kInterrupted); kTimeout when the head has not stopped after `timeout_frames`.
+device::Status MoveHeadForScan(device::RobotDevices& dev, const device::HeadJoints& q,
+                               const StopRequest* stop, std::string* failed_device,
+                               double tolerance_rad = 0.1 * kPi / 180.0, int settle_frames = 4,
+                               int timeout_frames = 250);
+
 /// The sweep: from start to end count in `positions` frames (one stripe position per frame).
 /// Left to right as the cameras see it, so that the range image's columns read like the images.
 struct SweepConfig {

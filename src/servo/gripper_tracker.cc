@@ -73,6 +73,17 @@ TrackerStatus GripperTracker::Grab(device::StereoCamera& camera, device::StereoF
   return TrackerStatus::kOk;
 }
 
+TrackerStatus GripperTracker::GrabAfterLeds(device::StereoCamera& camera,
+                                            device::StereoFrame* frame) {
+  // A frame exposed before the LEDs switched may still be on its way (a real camera's
+  // latency): those are passed over, so that the frame looked at shows the new LEDs.
+  for (int k = 0; k < camera.frames_in_flight(); ++k) {
+    const TrackerStatus s = Grab(camera, frame);
+    if (s != TrackerStatus::kOk) return s;
+  }
+  return Grab(camera, frame);
+}
+
 TrackerStatus GripperTracker::SetLeds(device::Leds& leds, std::uint32_t mask) {
   device_status_ = leds.Set(side_, mask);
   failed_device_ = "leds";
@@ -342,7 +353,7 @@ TrackerStatus GripperTracker::Initialise(device::Leds& leds, device::StereoCamer
   for (int cycle = 0; cycle < options_.max_init_cycles; ++cycle) {
     // All on: the filter starts from the LEDs' mean; later cycles also fuse this frame.
     if ((s = SetLeds(leds, all)) != TrackerStatus::kOk) return s;
-    if ((s = Grab(camera, &frame)) != TrackerStatus::kOk) return s;
+    if ((s = GrabAfterLeds(camera, &frame)) != TrackerStatus::kOk) return s;
     if (!filter_.initialised()) {
       const std::vector<LedPoint> on = Points(frame);
       if (on.empty()) continue;
@@ -356,14 +367,14 @@ TrackerStatus GripperTracker::Initialise(device::Leds& leds, device::StereoCamer
     }
     // All off: the background.
     if ((s = SetLeds(leds, 0)) != TrackerStatus::kOk) return s;
-    if ((s = Grab(camera, &frame)) != TrackerStatus::kOk) return s;
+    if ((s = GrabAfterLeds(camera, &frame)) != TrackerStatus::kOk) return s;
     const std::vector<LedPoint> background = Points(frame);
     // One LED at a time: the single new point near the gripper is that LED.
     std::vector<LedPoint> identified;
     std::vector<int> ids;
     for (int i = 0; i < n; ++i) {
       if ((s = SetLeds(leds, 1u << i)) != TrackerStatus::kOk) return s;
-      if ((s = Grab(camera, &frame)) != TrackerStatus::kOk) return s;
+      if ((s = GrabAfterLeds(camera, &frame)) != TrackerStatus::kOk) return s;
       ++flashes_;
       std::vector<LedPoint> fresh;
       for (const LedPoint& p : Points(frame)) {

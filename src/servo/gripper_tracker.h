@@ -154,6 +154,8 @@ class GripperTracker {
   Pose3 X_CLCR(double verge) const;
 
   TrackerStatus Grab(device::StereoCamera& camera, device::StereoFrame* frame);
+  /// The first frame sure to show LEDs switched just before (StereoCamera::frames_in_flight).
+  TrackerStatus GrabAfterLeds(device::StereoCamera& camera, device::StereoFrame* frame);
   TrackerStatus SetLeds(device::Leds& leds, std::uint32_t mask);
 
   device::Side side_;

@@ -87,6 +87,7 @@ class GraspTask::SinkCamera final : public device::StereoCamera {
     return s;
   }
 
+  int frames_in_flight() const override { return inner_->frames_in_flight(); }  // H8TEMP
   std::unique_ptr<device::StereoCamera> Release() { return std::move(inner_); }
 
  private:
@@ -209,14 +210,18 @@ bool GraspTask::GrabFrame(bool track, bool images) {
 
 bool GraspTask::WaitUntil(const std::function<bool(bool*)>& done, std::string_view what,
                           bool track) {
-  const double t0 = have_frame_ ? last_frame_.t_s : 0.0;
+  // The move's time counts from the last frame before it; with none yet, from the first one
+  // (a camera's clock need not start at 0: a real one counts from its own start).
+  std::optional<double> t0;
+  if (have_frame_) t0 = last_frame_.t_s;
   for (;;) {
     // Untracked, the frames only keep time while the move goes on: nobody looks at their images.
     if (!GrabFrame(track, /*images=*/track)) return false;
+    if (!t0) t0 = last_frame_.t_s;
     bool finished = false;
     if (!done(&finished)) return false;
     if (finished) return true;
-    if (last_frame_.t_s - t0 > config_.move_timeout_s) {
+    if (last_frame_.t_s - *t0 > config_.move_timeout_s) {
       return Fail(Failure::kDeviceError, std::string(what) + " did not end within " +
                                              std::to_string(config_.move_timeout_s) + " s");
     }
@@ -308,6 +313,21 @@ bool GraspTask::Look() {
   BeginStage("look");
   device::HeadState head;
   if (!DeviceOk(dev_->head->Read(&head), "head", "read")) return false;
+  if (config_.look_head) {
+    const device::HeadJoints& q = *config_.look_head;
+    const double tol = config_.look_head_tolerance_rad;
+    if (std::abs(head.q.pan - q.pan) > tol || std::abs(head.q.tilt - q.tilt) > tol ||
+        std::abs(head.q.verge - q.verge) > tol) {
+      if (!DeviceOk(dev_->head->MoveTo(q), "head", "move")) return false;
+      if (!WaitUntil([this](bool* still) { return HeadStill(still); }, "head move", false)) {
+        return false;
+      }
+      for (int k = 0; k < config_.settle_frames; ++k) {
+        if (!GrabFrame(false)) return false;
+      }
+      if (!DeviceOk(dev_->head->Read(&head), "head", "read")) return false;
+    }
+  }
   result_.scan_head = head.q;
   scan::Scanner scanner(model_.head, model_.cameras, model_.laser);
   scan::SweepConfig sweep = config_.sweep;

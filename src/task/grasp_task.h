@@ -74,6 +74,11 @@ struct TaskConfig {
   double hold_s = 2.0;   ///< how long it is held up (s)
 
   scan::SweepConfig sweep;
+  /// Where the head looks for the scan (scan::kLookHead). The look first moves the head there
+  /// when it stands more than look_head_tolerance_rad away on any axis (a real Biclops ends its
+  /// homing looking ahead); unset: it scans from wherever the head is.
+  std::optional<device::HeadJoints> look_head = scan::kLookHead;
+  double look_head_tolerance_rad = DegToRad(0.1);
   /// Polled at every frame (the scan's sweep included): when requested the stage ends with
   /// Failure::kInterrupted. May be null.
   const StopRequest* stop = nullptr;

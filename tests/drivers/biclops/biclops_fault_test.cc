@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -126,6 +127,16 @@ TEST(BiclopsFaults, ThousandCommandsNoneLostRepeatedOrAltered) {
     ASSERT_EQ(log[i], expect[i]) << "entry " << i << ": opcode " << int(log[i].opcode) << " axis "
                                  << log[i].axis << " value " << log[i].value;
   }
+  // The driver's own log explains the chip's (an entry is unconfirmed only where a failed call
+  // left its outcome unknown).
+  const auto driver_log = head.command_log().Snapshot();
+  const auto unconfirmed = std::count_if(driver_log.begin(), driver_log.end(),
+                                         [](const auto& e) { return !e.confirmed; });
+  std::printf("driver log: %zu entries, %td unconfirmed\n", driver_log.size(), unconfirmed);
+  EXPECT_TRUE(LogExplains<pmd::Command>(
+      driver_log, log, [](const pmd::Command& c, const PmdExecuted& x) {
+        return c.axis == x.axis && c.opcode == x.opcode && pmd::CommandValue(c) == x.value;
+      }));
 
   // And the head ends where it was last sent.
   device::HeadState state;

@@ -33,7 +33,8 @@ class FixedHead final : public device::Head {
 TEST(GstStereoCamera, GrabsBothCamerasWithTheBoardsLatchAndTheHead) {
   FixedHead head;
   std::uint32_t board_frame = 100;
-  LatchSource latch = [&](ExposureLatch* l) {
+  LatchSource latch = [&](std::optional<std::uint32_t> wanted, ExposureLatch* l) {
+    EXPECT_FALSE(wanted);  // latch_pairing latest
     l->frame = board_frame++;
     l->encoder_count = static_cast<std::int32_t>(board_frame) * 7;
     l->laser_on = true;
@@ -91,7 +92,9 @@ TEST(GstStereoCamera, ReportsBadPipelinesFramesAndTheEndOfAStream) {
   EXPECT_EQ(s, Status::kDisconnected);
   EXPECT_NE(ending->last_error().find("left camera"), std::string::npos);
 
-  LatchSource broken = [](ExposureLatch*) { return Status::kTimeout; };
+  LatchSource broken = [](std::optional<std::uint32_t>, ExposureLatch*) {
+    return Status::kTimeout;
+  };
   auto no_board =
       GstStereoCamera::Open({Pipeline("red"), Pipeline("red")}, broken, nullptr, &error);
   ASSERT_TRUE(no_board) << error;

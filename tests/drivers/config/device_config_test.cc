@@ -75,7 +75,8 @@ TEST(DeviceConfig, EveryDriverOptionReachesItsDriver) {
       "              tilt: {min_rad: -0.5, max_rad: 0.7, max_speed_rad_s: 2.0}}\n"
       "  laser: {driver: laser_board, port: /dev/ttyUSB0, options: {call_timeout_s: 0.5}}\n"
       "  cameras: {driver: gstreamer, left: a ! appsink, right: b ! appsink,\n"
-      "            options: {width: 640, height: 480}}\n");
+      "            options: {width: 640, height: 480, frame_timeout_s: 0.8,\n"
+      "                      latch_pairing: offset, frame_offset: -2}}\n");
   const Val2Options& arm = c.Backend<Val2Backend>("arm_right")->options;
   EXPECT_EQ(arm.reply_timeout_s, 0.25);
   EXPECT_EQ(arm.max_errors, 7);
@@ -97,6 +98,20 @@ TEST(DeviceConfig, EveryDriverOptionReachesItsDriver) {
   EXPECT_EQ(cameras.width, 640);
   EXPECT_EQ(cameras.height, 480);
   EXPECT_EQ(cameras.left, "a ! appsink");
+  EXPECT_EQ(cameras.frame_timeout_s, 0.8);
+  EXPECT_EQ(cameras.latch_pairing, LatchPairing::kOffset);
+  EXPECT_EQ(cameras.frame_offset, -2);
+}
+
+TEST(DeviceConfig, CameraOptionsDefaultToTheNewestLatchAndAHalfSecondTimeout) {
+  const DevicesConfig c = Parse(
+      "devices:\n"
+      "  laser: {driver: laser_board, port: /dev/ttyUSB0}\n"
+      "  cameras: {driver: gstreamer, left: a ! appsink, right: b ! appsink}\n");
+  const GstCameraConfig& cameras = c.Backend<GstreamerBackend>("cameras")->cameras;
+  EXPECT_EQ(cameras.frame_timeout_s, 0.5);
+  EXPECT_EQ(cameras.latch_pairing, LatchPairing::kLatest);
+  EXPECT_EQ(cameras.frame_offset, 0);
 }
 
 TEST(DeviceConfig, BadOptionsAreNamedWithLineValueAndRange) {
@@ -129,6 +144,20 @@ TEST(DeviceConfig, BadOptionsAreNamedWithLineValueAndRange) {
        "devices.hand_left.options.max_opening_m", "2", "(0, 0.5]"},
       {"devices:\n  laser: {driver: laser_board, port: p, options: {leds_per_gripper: 0}}\n",
        "devices.laser.options.leds_per_gripper", "0", "[1, 32]"},
+      {"devices:\n  cameras: {driver: gstreamer, left: a, right: b, options: "
+       "{frame_timeout_s: 0}}\n",
+       "devices.cameras.options.frame_timeout_s", "0", "(0, 10]"},
+      {"devices:\n  cameras: {driver: gstreamer, left: a, right: b, options: "
+       "{frame_timeout_s: 11}}\n",
+       "devices.cameras.options.frame_timeout_s", "11", "the longest wait"},
+      {"devices:\n  cameras: {driver: gstreamer, left: a, right: b, options: "
+       "{latch_pairing: nearest}}\n",
+       "devices.cameras.options.latch_pairing", "nearest", "latest (the newest at grab time) or"},
+      {"devices:\n  cameras: {driver: gstreamer, left: a, right: b, options: "
+       "{frame_offset: 1.5}}\n",
+       "devices.cameras.options.frame_offset", "1.5", "an integer in [-100000, 100000]"},
+      {"devices:\n  cameras: {driver: gstreamer, left: a, right: b, options: {gain: 1}}\n",
+       "devices.cameras.options.gain", "gain", "latch_pairing"},
       {"devices:\n  head: {driver: sim, options: {}}\n", "devices.head.options", "options",
        "one of: driver"},
       {"devices:\n  arm_left: {driver: val2, port: p, options: [1]}\n",

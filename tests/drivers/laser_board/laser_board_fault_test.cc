@@ -123,6 +123,14 @@ void ThousandCommands(const std::string& name, const LaserBoardOptions& options,
   EXPECT_GT(st.retransmissions, 0u);
   // ...and the board executed exactly what was commanded: none lost, duplicated or altered.
   EXPECT_EQ(rig.Executed(), commanded);
+  // The driver's own log says the same, each entry confirmed (every failed call was retried).
+  const auto driver_log = board->command_log().Snapshot();
+  std::vector<lb::Command> logged;
+  for (const auto& e : driver_log) {
+    EXPECT_TRUE(e.confirmed);
+    logged.push_back(e.command);
+  }
+  EXPECT_EQ(logged, commanded);
 }
 
 TEST(LaserBoardFaults, ThousandCommandsThroughCorruptionAndDropouts) {
@@ -168,6 +176,14 @@ TEST(LaserBoardFaults, LostReplyIsNeverExecutedTwice) {
                                              lb::SetLaser{true}, lb::MotorGoTo{-500, 9000},
                                              lb::MotorGoTo{1000, 9000}};
   EXPECT_EQ(rig.Executed(), expected);
+  // The driver logged each once, confirmed: the lost SET_LASER when the sync before the next
+  // command showed the board's last number to be its own.
+  std::vector<lb::Command> logged;
+  for (const auto& e : board->command_log().Snapshot()) {
+    EXPECT_TRUE(e.confirmed);
+    logged.push_back(e.command);
+  }
+  EXPECT_EQ(logged, expected);
   const auto replayed = rig.With([](LaserBoardEmulator& e) { return e.counts().replayed; });
   EXPECT_GE(replayed, 1u);
 }

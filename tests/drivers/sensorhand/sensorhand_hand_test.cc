@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <optional>
 #include <thread>
 
@@ -168,6 +169,14 @@ struct Rig {
     for (std::size_t i = 1; i < emu.size(); ++i) {
       EXPECT_FALSE(emu[i] == emu[i - 1]) << "command " << i << " executed twice";
     }
+    // The driver's command log explains everything the hand executed, stream starts included.
+    const auto all = Emu([](SensorHandEmulator& e) {
+      std::vector<sensorhand::Command> v;
+      for (const SensorHandLogEntry& x : e.log()) v.push_back(x.command);
+      return v;
+    });
+    EXPECT_TRUE(LogExplains<sensorhand::Command>(hand->command_log().Snapshot(), all,
+                                                 std::equal_to<sensorhand::Command>()));
   }
   // |estimated - true opening| (m), once the fingers are still.
   double EstimateError() {

@@ -350,6 +350,24 @@ TEST(Val2Where, RoundTripAndStrictness) {
   EXPECT_FALSE(ParseWhere(lines, &back));
 }
 
+TEST(Val2Where, JointsAloneParseAsStrictly) {
+  WhereReport r;
+  r.location = RoundForWire({100, -200, 300, 10, 20, 30});
+  r.joints = {1.5, -60.25, 30.125, 0.0, -45.001, 359.999};
+  std::array<std::string, 4> lines = FormatWhere(r);
+  std::array<double, 6> joints{};
+  ASSERT_TRUE(ParseWhereJoints(lines[2], lines[3], &joints));
+  EXPECT_EQ(joints, r.joints);
+  lines[1][5] = '#';  // the location damaged: the joints do not need it
+  EXPECT_TRUE(ParseWhereJoints(lines[2], lines[3], &joints));
+  EXPECT_FALSE(ParseWhereJoints(lines[0], lines[3], &joints));  // the location's header
+  std::string header = lines[2];
+  header[4] = 'X';
+  EXPECT_FALSE(ParseWhereJoints(header, lines[3], &joints));
+  EXPECT_FALSE(ParseWhereJoints(lines[2], lines[3] + " ", &joints));
+  EXPECT_FALSE(ParseWhereJoints(lines[2], lines[3].substr(1), &joints));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Answers.
 

@@ -201,6 +201,12 @@ TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
   }
   EXPECT_EQ(first_diff, expected.size()) << "first difference";
   EXPECT_EQ(log.size(), expected.size());
+  // The driver's own log says the same: every failed call was retried until it completed, and
+  // no stop was typed blind, so every entry is confirmed.
+  const auto driver_log = arm.command_log().Snapshot();
+  EXPECT_TRUE(std::all_of(driver_log.begin(), driver_log.end(),
+                          [](const auto& e) { return e.confirmed; }));
+  EXPECT_TRUE(LogExplains<std::string>(driver_log, log, std::equal_to<std::string>()));
 }
 
 TEST(Val2Faults, ConfirmedReadsAreRightUnderCorruption) {

@@ -1,0 +1,296 @@
+// The twin behind the real wires (sim/twin/) as the real drivers see it: the twin runs the
+// default scenario in wall-clock time on a thread, streams its cameras through GstStereoServer
+// and serves its serial devices on ptys; the real GstStereoCamera (latch_pairing offset, the
+// latches from the real LaserBoard driver) and the real Val2Arm (arm_right, 9600 baud) talk to
+// it. Both cases run once (Iterations(1)) and report manual counters.
+
+#include <benchmark/benchmark.h>
+#include <stdlib.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "camera/gst_stereo_camera.h"
+#include "camera/gst_stereo_server.h"
+#include "emulators/val2_emulator.h"
+#include "laser_board/board_devices.h"
+#include "laser_board/laser_board.h"
+#include "serial/serial_port.h"
+#include "sim/twin/twin.h"
+#include "val2/val2_arm.h"
+
+namespace hgrasp::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using device::Status;
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+int Baud(const char* key) {
+  for (const TwinLineSpec& s : kTwinLines) {
+    if (std::string(s.key) == key) return s.baud;
+  }
+  return 0;
+}
+
+// The twin on a thread, its camera server, and the real drivers on its wires. `ok` false (and
+// `error` why) when something did not open.
+struct TwinRig {
+  std::string dir;
+  std::unique_ptr<drivers::GstStereoServer> server;
+  std::unique_ptr<Twin> twin;
+  std::atomic<bool> stop{false};
+  std::thread runner;
+  std::shared_ptr<drivers::LaserBoard> board;
+  std::unique_ptr<drivers::BoardStripeLaser> laser;
+  std::unique_ptr<drivers::GstStereoCamera> camera;
+  std::unique_ptr<drivers::Val2Arm> arm;
+  bool ok = false;
+  std::string error;
+
+  TwinRig() {
+    setenv("HGRASP_ROOT", HGRASP_SOURCE_ROOT, 0);
+    std::string t = (fs::temp_directory_path() / "twin_bench_XXXXXX").string();
+    if (::mkdtemp(t.data()) == nullptr) {
+      error = "no temporary folder";
+      return;
+    }
+    dir = t;
+    server = drivers::GstStereoServer::Open("127.0.0.1", 0, 0, 320, 240, &error);
+    if (!server) return;
+    drivers::GstStereoServer* srv = server.get();
+    TwinOptions options;
+    options.dir = dir;
+    twin = std::make_unique<Twin>(
+        LoadScenario(std::string(HGRASP_SOURCE_ROOT) + "/scenarios/default.yaml"), options,
+        [srv](int camera, const cv::Mat& bgr, std::uint64_t frame, double t) {
+          srv->Push(camera, bgr, frame, t);
+        });
+    runner = std::thread([this] { twin->Run([this] { return !stop.load(); }); });
+    auto open = [this](const char* key) -> std::unique_ptr<drivers::SerialPort> {
+      drivers::SerialConfig serial;
+      serial.port = dir + "/" + key;
+      serial.baud = Baud(key);
+      return drivers::SerialPort::Open(serial, &error);
+    };
+    std::unique_ptr<drivers::SerialPort> board_port = open("laser_board");
+    if (!board_port) return;
+    board = std::make_shared<drivers::LaserBoard>(std::move(board_port));
+    laser = std::make_unique<drivers::BoardStripeLaser>(board);
+    std::unique_ptr<drivers::SerialPort> arm_port = open("arm_right");
+    if (!arm_port) return;
+    arm = std::make_unique<drivers::Val2Arm>(std::move(arm_port));
+    drivers::LatchSource latch = [b = board](std::optional<std::uint32_t> frame,
+                                             drivers::ExposureLatch* out) {
+      drivers::FrameLatch l;
+      const Status status = frame ? b->FrameLatchOf(*frame, &l) : b->LatestFrameLatch(&l);
+      out->frame = l.frame;
+      out->encoder_count = l.encoder_count;
+      out->laser_on = l.laser_on;
+      return status;
+    };
+    drivers::GstCameraConfig config;
+    config.left = server->ClientPipeline(0);
+    config.right = server->ClientPipeline(1);
+    config.latch_pairing = drivers::LatchPairing::kOffset;
+    camera = drivers::GstStereoCamera::Open(config, latch, nullptr, &error);
+    if (!camera) return;
+    // The streams connect: the first frames that come through.
+    device::StereoFrame frame;
+    int got = 0;
+    const Clock::time_point t0 = Clock::now();
+    while (got < 3 && Since(t0) < 10.0) {
+      if (camera->Grab(&frame) == Status::kOk) ++got;
+    }
+    if (got < 3) {
+      error = "no frames from the twin within 10 s: " + camera->last_error();
+      return;
+    }
+    ok = true;
+  }
+  // Stops the twin (its exposures and logs may be read after).
+  void StopTwin() {
+    stop = true;
+    if (runner.joinable()) runner.join();
+  }
+  ~TwinRig() {
+    camera.reset();
+    arm.reset();
+    laser.reset();
+    board.reset();
+    StopTwin();
+    twin.reset();
+    server.reset();
+    std::error_code ec;
+    if (!dir.empty()) fs::remove_all(dir, ec);
+  }
+};
+
+// (a) Frames through to the driver for ~8 s, the laser on and sweeping back and forth between
+// its limits at the argument's speed (counts/s): 400, the scanner's sweep (4800 counts in 300
+// frames), and 9000, full speed. Counters: pairs per second of wall time the driver returns,
+// frames lost on the way (gaps in the frame numbers: they include the twin's overruns), and the
+// twin's exposures, renders, overruns and render times (since its start, a second before the
+// 8 s). At full speed each reversal moves the head's joints by 1-2 urad (the reaction of the
+// laser's ramp), over the render cache's tolerance: a full re-render each time (50-150 ms on
+// llvmpipe, more when the CPUs are busy), and overruns.
+void BM_TwinFramesToTheDriver(benchmark::State& state) {
+  for (auto _ : state) {
+    TwinRig rig;
+    if (!rig.ok) {
+      state.SkipWithError(rig.error.c_str());
+      return;
+    }
+    const double speed = static_cast<double>(state.range(0));
+    std::int32_t target = 4500;
+    rig.laser->SetLaser(true);
+    rig.laser->MoveTo(target, speed);
+    const drivers::GstCameraStats s0 = rig.camera->stats();
+    device::StereoFrame frame;
+    int failed = 0;
+    const Clock::time_point t0 = Clock::now();
+    while (Since(t0) < 8.0) {
+      if (rig.camera->Grab(&frame) != Status::kOk) {
+        ++failed;
+        continue;
+      }
+      device::StripeLaserState st;
+      if (rig.laser->Read(&st) == Status::kOk && !st.moving) {
+        target = -target;
+        rig.laser->MoveTo(target, speed);
+      }
+    }
+    const double wall = Since(t0);
+    const drivers::GstCameraStats s1 = rig.camera->stats();
+    rig.laser->Stop();
+    rig.laser->SetLaser(false);
+    rig.StopTwin();
+    const TwinFrameCounts c = rig.twin->frame_counts();
+    state.counters["frames_per_s"] = static_cast<double>(s1.pairs - s0.pairs) / wall;
+    state.counters["lost_left"] = static_cast<double>(s1.frames_lost[0] - s0.frames_lost[0]);
+    state.counters["lost_right"] = static_cast<double>(s1.frames_lost[1] - s0.frames_lost[1]);
+    state.counters["unpaired"] =
+        static_cast<double>(s1.unpaired[0] - s0.unpaired[0] + s1.unpaired[1] - s0.unpaired[1]);
+    state.counters["failed_grabs"] = failed;
+    state.counters["exposures"] = static_cast<double>(c.exposures);
+    state.counters["rendered"] = static_cast<double>(c.rendered);
+    state.counters["overruns"] = static_cast<double>(c.overruns);
+    state.counters["render_mean_ms"] = c.rendered ? 1e3 * c.render_s / c.rendered : 0.0;
+    state.counters["render_max_ms"] = 1e3 * c.max_render_s;
+    state.counters["max_lag_ms"] = 1e3 * c.max_lag_s;
+  }
+}
+BENCHMARK(BM_TwinFramesToTheDriver)
+    ->Arg(400)
+    ->Arg(9000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// (b) From a frame's exposure to the arm's controller executing a command sent on it: Grab a
+// frame (t_s = its exposure on the twin's clock), send a tiny tool-relative move (0.5 mm along
+// x, alternating) at once, and pair the command with the time the twin's VAL II emulator
+// executed it (its CR, twin clock). The latency includes the frame's rendering and transport
+// (GStreamer over loopback TCP), the driver's latch request to the laser board, and Val2Arm's
+// typing of the command at 9600 baud with its echo check and ^R confirmation (about 40
+// characters each way): it is what a servo loop on the real wires would see. Before each Grab
+// the arm's move is waited out (Read until !moving) so that the commands do not pile up, and one
+// frame is grabbed and dropped so that the frame used is one that has just arrived, not the
+// one the camera's one-frame queue kept during the wait.
+void BM_TwinExposureToArmCommand(benchmark::State& state) {
+  for (auto _ : state) {
+    TwinRig rig;
+    if (!rig.ok) {
+      state.SkipWithError(rig.error.c_str());
+      return;
+    }
+    constexpr int kCommands = 20;
+    std::vector<double> exposure_s, call_ms;
+    int failed = 0, timeouts = 0;
+    device::StereoFrame frame;
+    device::ArmState arm;
+    if (rig.arm->Read(&arm) != Status::kOk) ++failed;
+    double loop_t0 = -1.0;
+    for (int i = 0; i < kCommands; ++i) {
+      if (rig.camera->Grab(&frame) != Status::kOk || rig.camera->Grab(&frame) != Status::kOk) {
+        ++failed;
+        continue;
+      }
+      if (loop_t0 < 0.0) loop_t0 = frame.t_s;
+      Pose3 X = Pose3::Identity();
+      X.translation().x() = (i % 2 == 0 ? 1.0 : -1.0) * 0.0005;
+      const Clock::time_point sent = Clock::now();
+      if (rig.arm->MoveRelative(X) != Status::kOk) {
+        ++failed;
+        continue;
+      }
+      call_ms.push_back(1e3 * Since(sent));
+      exposure_s.push_back(frame.t_s);
+      const Clock::time_point t0 = Clock::now();
+      for (;;) {
+        if (rig.arm->Read(&arm) == Status::kOk && !arm.moving) break;
+        if (Since(t0) > 5.0) {
+          ++timeouts;
+          break;
+        }
+      }
+    }
+    rig.StopTwin();
+    const auto& val2 =
+        dynamic_cast<const drivers::Val2Emulator&>(rig.twin->line("arm_right")->device());
+    std::vector<double> executed;
+    for (const drivers::Val2Executed& e : val2.executed()) {
+      if (loop_t0 >= 0.0 && e.t_s >= loop_t0 &&
+          (e.line.rfind("DO APPRO", 0) == 0 || e.line.rfind("DO MOVE", 0) == 0)) {
+        executed.push_back(e.t_s);
+      }
+    }
+    std::vector<double> latency;
+    for (std::size_t i = 0; i < exposure_s.size() && i < executed.size(); ++i) {
+      latency.push_back(1e3 * (executed[i] - exposure_s[i]));
+    }
+    double mean = 0.0, p95 = 0.0, max = 0.0;
+    if (!latency.empty()) {
+      for (double l : latency) mean += l / static_cast<double>(latency.size());
+      std::vector<double> sorted = latency;
+      std::sort(sorted.begin(), sorted.end());
+      // Nearest rank: with 20 commands the 19th.
+      const auto rank =
+          static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(sorted.size())));
+      p95 = sorted[std::max<std::size_t>(rank, 1) - 1];
+      max = sorted.back();
+    }
+    state.counters["commands"] = static_cast<double>(exposure_s.size());
+    state.counters["executed"] = static_cast<double>(executed.size());
+    state.counters["failed"] = failed;
+    state.counters["settle_timeouts"] = timeouts;
+    double call_mean = 0.0;
+    for (double c : call_ms) call_mean += c / static_cast<double>(call_ms.size());
+    // How long MoveRelative took (wall): the typing at 9600 baud, the echo checks, the ^R
+    // confirmation and the CR's answer. The rest of the latency is the frame's age when Grab
+    // returned it (render, transport, the latch request).
+    state.counters["move_call_mean_ms"] = call_mean;
+    state.counters["latency_mean_ms"] = mean;
+    state.counters["latency_p95_ms"] = p95;
+    state.counters["latency_max_ms"] = max;
+    if (executed.size() != exposure_s.size()) {
+      state.SkipWithError("the commands sent and the moves the controller executed differ");
+    }
+  }
+}
+BENCHMARK(BM_TwinExposureToArmCommand)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace hgrasp::sim
