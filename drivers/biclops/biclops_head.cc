@@ -253,10 +253,16 @@ Status BiclopsHead::Resync() {
   // gives a checksum error, an unknown opcode or a 2-byte answer instead of 6: always caught.
   ++counters_.resyncs;
   const std::uint8_t zero = 0x00;
-  const double wait = ZeroWait();
   // Rounds without an answer go on until the line has been silent too long (a cut cable is a
   // timeout); answered rounds that do not end in sync are limited.
   for (int answered_rounds = 0; answered_rounds < 8;) {
+    // The wait after each zero, from the round trips measured so far (the check's exchange
+    // measures one each round). Taken once for the whole resync, a driver's first one waited
+    // 3 ms throughout (no round trip measured yet): on a 9600-baud line a zero and the first
+    // byte of its answer take 2.1 ms on the wire, so with a millisecond of latency the answer
+    // to the fourth zero came after a fifth had gone, which stayed pending in the chip and
+    // misframed every check (a checksum error) until the resync gave up.
+    const double wait = ZeroWait();
     Status s = Drain(wait);
     if (s == Status::kDisconnected) return s;
     if (silent_) return Status::kTimeout;

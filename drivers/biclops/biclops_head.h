@@ -234,8 +234,7 @@ class BiclopsHead final : public device::Head {
   /// it (then it is not sent again), else it is re-sent (at most max_resends times). `took`
   /// clears its second argument when the chip would show the same had the Update never
   /// arrived (the Update is then recorded unconfirmed).
-  device::Status UpdateOnce(int axis,
-                            const std::function<device::Status(bool*, bool*)>& took);
+  device::Status UpdateOnce(int axis, const std::function<device::Status(bool*, bool*)>& took);
   /// An Update during homing: re-sent only when the chip shows it did not take it.
   /// `at_target`: the axis stands at `target` already.
   device::Status HomingUpdate(int axis, std::int32_t target, bool at_target);

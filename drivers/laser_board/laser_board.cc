@@ -15,8 +15,9 @@ namespace lb = laser_board;
 
 namespace {
 
-// After a bad candidate or a bad-CRC NAK: how long to keep listening for a good reply that may
-// follow in the same burst before retransmitting (about 20 byte times at 115200 baud).
+// After bytes that were not our reply (a bad candidate, a bad-CRC NAK, a damaged reply): how
+// long to keep listening for a good reply that may follow in the same burst before
+// retransmitting (about 20 byte times at 115200 baud).
 constexpr std::chrono::milliseconds kResendGrace{2};
 // While the port is gone: how often to try again (SerialPort reopens at most every 20 ms).
 constexpr std::chrono::milliseconds kReconnectPoll{20};
@@ -215,14 +216,12 @@ Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
   std::array<std::uint8_t, 256> buf;
   std::vector<lb::DecodeEvent> events;
 
-  // Looks through decoded events for our reply. Returns true when found; sets *resend when a
-  // damaged frame (possibly our reply) or a bad-CRC NAK for our number came in.
-  auto examine = [&](bool* resend) {
+  // Looks through decoded events for our reply. Returns true when found.
+  auto examine = [&]() {
     for (lb::DecodeEvent& e : events) {
       if (e.kind == lb::DecodeEvent::Kind::kBadCrc) {
         ++stats_.bad_frames;
         failure = Status::kBadReply;
-        *resend = true;
         continue;
       }
       const auto r = lb::ParseReply(e.frame);
@@ -234,8 +233,7 @@ Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
       if (!r->ack) ++stats_.naks;
       if (r->seq != seq) continue;  // an answer to an earlier request
       if (!r->ack && r->error == lb::ErrorCode::kBadCrc) {
-        *resend = true;  // the board got our frame damaged: send it again
-        continue;
+        continue;  // the board got our frame damaged: it is sent again (below)
       }
       if (r->command != code) continue;
       // GET_STATUS echoes its token: an earlier request's late answer (same SEQ) is not ours.
@@ -263,14 +261,13 @@ Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
     auto attempt_end = std::min(
         deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double>(options_.reply_timeout_s)));
-    bool resend = false;
     while (true) {
       const auto now = Clock::now();
       if (now >= attempt_end) {
         // A complete reply may hide behind a false start byte whose LEN is still waiting for
         // bytes: give that candidate up and look again.
         decoder_.Expire(&events);
-        if (examine(&resend)) return Status::kOk;
+        if (examine()) return Status::kOk;
         break;
       }
       std::size_t n = 0;
@@ -284,8 +281,13 @@ Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
       if (s != Status::kOk || n == 0) continue;
       if (failure == Status::kDisconnected) failure = Status::kTimeout;  // it came back
       decoder_.Feed(std::span<const std::uint8_t>(buf.data(), n), &events);
-      if (examine(&resend)) return Status::kOk;
-      if (resend) attempt_end = std::min(attempt_end, Clock::now() + kResendGrace);
+      if (examine()) return Status::kOk;
+      // Bytes, and no reply of ours (a damaged frame, a bad-CRC NAK for our number, a reply
+      // whose corrupted start byte or LEN hides it from the decoder): the rest of a good one may
+      // follow in the same burst; else the request is sent again soon, not at the attempt's end.
+      // (Only damage the decoder saw used to shorten the attempt: a reply with a damaged start
+      // byte right after a dropout cost 80 ms more, and with the dropout the call budget.)
+      attempt_end = std::min(attempt_end, Clock::now() + kResendGrace);
     }
   }
   return failure;

@@ -66,11 +66,12 @@ std::string FirstError(const std::string& output) {
   return "";
 }
 
-// The joints from the output of WHERE: its last two lines, the joints' header and values,
-// strictly parsed. The two location lines before them are not needed (Read reports joints
-// only) and not required intact: on a line that corrupts 1 % of its bytes, a whole report (248
-// characters) arrives intact one time in ten, its last two lines (124) one time in four, and each
-// report takes 0.27 s at 9600 baud.
+// The joints from the output of WHERE: its last line, strictly parsed (its format is the joints'
+// alone). The three lines before it are not needed (Read reports joints only) and not required
+// intact: on a line that corrupts 1 % of its bytes each way, a whole report (248 characters)
+// arrives intact one time in ten, its last line (62) one time in two, and each report takes
+// 0.27 s at 9600 baud; with the whole report required, one Read in seven found none intact
+// within max_call_s.
 bool ParseWhereOutput(const std::string& output, val2::WhereReport* report) {
   val2::OutputDecoder dec;
   dec.Feed(output);
@@ -80,8 +81,7 @@ bool ParseWhereOutput(const std::string& output, val2::WhereReport* report) {
     if (u.kind != val2::OutputUnit::Kind::kLine || lines.size() == 4) return false;
     lines.push_back(u.text);
   }
-  const std::size_t n = lines.size();
-  return n >= 2 && val2::ParseWhereJoints(lines[n - 2], lines[n - 1], &report->joints);
+  return !lines.empty() && val2::ParseWhereJoints(lines.back(), &report->joints);
 }
 
 }  // namespace
@@ -306,8 +306,8 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
   *outcome = LineOutcome{};
   bool armed = resume;    // the whole line may be in the controller's input, or have run
   bool verified = false;  // a ^R answer showed exactly the line
-  // While armed: traces of a cancel, and of an execution, in answers since.
-  bool cancel_trace = false, execution_trace = false;
+  // While armed: traces of a cancel, of an execution and of a message, in answers since.
+  bool cancel_trace = false, execution_trace = false, message_trace = false;
   int suspect = 0;  // ^R answers near the line but not it, in a row
   int errors = 0;   // lines that ran with "not understood"
   for (;;) {
@@ -329,6 +329,13 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       }
     } else if (armed && Gone(buf_, line) && cancel_trace && !execution_trace) {
       armed = false;  // gone, and the answers show a cancel and no execution: it did not run
+      continue;
+    } else if (armed && Gone(buf_, line) && message_trace) {
+      // Gone, and an answer too damaged to classify held a message: the line that ran printed
+      // it, so it was not the command (which runs silently; a CR damaged into a character had
+      // left it with a character more) or the command refused. It did not take effect: typed
+      // again. (Taken as the command's silent run, the command was reported done and lost.)
+      armed = false;
       continue;
     } else if (armed && Gone(buf_, line)) {
       // The line has left the controller's input: it ran, and its answer was lost. (A line
@@ -390,11 +397,14 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
     Reaction r;
     std::optional<std::string> ran;
     const std::string before = buf_;
-    if (armed && !armed_before) cancel_trace = execution_trace = false;  // armed just now
+    if (armed && !armed_before) {
+      cancel_trace = execution_trace = message_trace = false;  // armed just now
+    }
     const Status s = Step(send, expected, timeout, call, &r, &ran);
     if (armed) {
       cancel_trace |= saw_cancel_;
       execution_trace |= saw_execution_;
+      message_trace |= saw_message_;
     }
     if (s != Status::kOk) {
       if (state_changing && armed) pending_ = line;
@@ -451,7 +461,7 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
 Status Val2Arm::Dispose(const std::string& pending, CallClock* call, bool* executed) {
   *executed = false;
   bool armed = true;  // the pending line may be complete in the controller, or have run
-  bool cancel_trace = false, execution_trace = false;
+  bool cancel_trace = false, execution_trace = false, message_trace = false;
   for (;;) {
     if (Clock::now() >= call->Deadline()) return Status::kTimeout;
     std::string send;
@@ -463,11 +473,12 @@ Status Val2Arm::Dispose(const std::string& pending, CallClock* call, bool* execu
         guesses_.push_back(pending);
       }
     } else if (buf_.empty()) {
-      // Gone without our cancelling it: it ran (unless the answers show only a cancel).
-      if (armed && !(cancel_trace && !execution_trace)) *executed = true;
+      // Gone without our cancelling it: it ran (unless the answers show only a cancel, or a
+      // message: then what ran was not the command, see Drive).
+      if (armed && !(cancel_trace && !execution_trace) && !message_trace) *executed = true;
       return Status::kOk;
     } else {
-      if (armed && Gone(buf_, pending) && !(cancel_trace && !execution_trace)) {
+      if (armed && Gone(buf_, pending) && !(cancel_trace && !execution_trace) && !message_trace) {
         *executed = true;  // it ran; stray bytes since
       }
       armed = false;  // from here on the line is being cancelled, not run
@@ -482,6 +493,7 @@ Status Val2Arm::Dispose(const std::string& pending, CallClock* call, bool* execu
     if (armed) {
       cancel_trace |= saw_cancel_;
       execution_trace |= saw_execution_;
+      message_trace |= saw_message_;
     }
     if (r.kind == Reaction::Kind::kExecuted) {
       const bool was_line = ran ? !RTrim(*ran).empty() : armed;
@@ -565,6 +577,7 @@ Status Val2Arm::Step(const std::string& bytes, const std::string& expected, doub
   // classify (a byte inserted into the line, say): the echo of ^U, or a CR LF that is not the
   // tail of a "^U" or "^R" echo.
   saw_cancel_ = answer.find("^U\r\n") != std::string::npos;
+  saw_message_ = !FirstError(answer).empty();
   saw_execution_ = false;
   for (std::size_t i = answer.find("\r\n"); i != std::string::npos;
        i = answer.find("\r\n", i + 1)) {

@@ -198,6 +198,7 @@ class Val2Arm final : public device::Arm {
   std::vector<std::string> guesses_ = {""};  // likely lines while !known_
   std::string tentative_view_;               // an unexpected retype, believed when seen again
   bool saw_cancel_ = false, saw_execution_ = false;  // traces in the last answer
+  bool saw_message_ = false;                         // a "*...*" message in the last answer
 
   std::optional<std::string> pending_;          // state-changing line of a failed call
   std::optional<std::string> executed_record_;  // a pending line found executed later

@@ -510,9 +510,8 @@ std::array<std::string, 4> FormatWhere(const WhereReport& r) {
   return lines;
 }
 
-bool ParseWhereJoints(const std::string& header, const std::string& values,
-                      std::array<double, 6>* joints) {
-  return header == Header(kJointLabels) && ParseFields(values, kJointDecimals, joints);
+bool ParseWhereJoints(const std::string& values, std::array<double, 6>* joints) {
+  return ParseFields(values, kJointDecimals, joints);
 }
 
 bool ParseWhere(const std::array<std::string, 4>& lines, WhereReport* report) {

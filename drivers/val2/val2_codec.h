@@ -205,9 +205,9 @@ std::array<std::string, 4> FormatWhere(const WhereReport& report);
 /// Strict inverse of FormatWhere: the exact headers, fields of exactly 10 characters, each a
 /// right-aligned ParseNumber with the exact number of decimals.
 bool ParseWhere(const std::array<std::string, 4>& lines, WhereReport* report);
-/// The joints alone, as strictly: `header` the JT1..JT6 line, `values` the joints' line.
-bool ParseWhereJoints(const std::string& header, const std::string& values,
-                      std::array<double, 6>* joints);
+/// The joints' line alone (the last line WHERE prints), as strictly. Its format tells it from
+/// every other line of the report: six fields of 3 decimals (the location's X, Y, Z have 2).
+bool ParseWhereJoints(const std::string& values, std::array<double, 6>* joints);
 
 // ---------------------------------------------------------------------------------------------
 // The controller's output as a stream (driver side).

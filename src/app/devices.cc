@@ -31,37 +31,6 @@ std::string Where(const sim::Scenario& s, const cfg::DeviceConfig& d) {
   return d.line > 0 ? s.path + ":" + std::to_string(d.line) : s.path;
 }
 
-// H8TEMP: every byte in and out, timestamped, when H8_LINKS names a file prefix.
-class H8TraceLink final : public drivers::ByteLink {  // H8TEMP
- public:
-  H8TraceLink(std::unique_ptr<drivers::ByteLink> in, const std::string& path)
-      : in_(std::move(in)), f_(std::fopen(path.c_str(), "w")), t0_(std::chrono::steady_clock::now()) {}
-  ~H8TraceLink() override { if (f_) std::fclose(f_); }
-  device::Status Write(std::span<const std::uint8_t> b) override {
-    Log(">", b.data(), b.size(), 0.0);
-    return in_->Write(b);
-  }
-  device::Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
-    const device::Status s = in_->Read(buf, timeout_s, n);
-    if (s == device::Status::kOk && *n > 0) Log("<", buf.data(), *n, timeout_s);
-    else if (timeout_s > 0.0) Log(".", nullptr, 0, timeout_s);
-    return s;
-  }
-  void Discard() override { in_->Discard(); }
- private:
-  void Log(const char* dir, const std::uint8_t* d, std::size_t n, double t) {
-    if (!f_) return;
-    std::fprintf(f_, "%.4f %s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(), dir);
-    for (std::size_t i = 0; i < n; ++i) std::fprintf(f_, " %02x", d[i]);
-    if (t > 0.0 && n == 0) std::fprintf(f_, " (waited %.3f)", t);
-    std::fprintf(f_, "\n");
-    std::fflush(f_);
-  }
-  std::unique_ptr<drivers::ByteLink> in_;
-  FILE* f_;
-  std::chrono::steady_clock::time_point t0_;
-};
-
 // Opens a device's serial port; a port that cannot be opened is bad input (exit 2), named.
 std::unique_ptr<drivers::ByteLink> OpenPort(const sim::Scenario& s, const std::string& key) {
   const cfg::DeviceConfig& d = *s.devices.Find(key);
@@ -73,9 +42,6 @@ std::unique_ptr<drivers::ByteLink> OpenPort(const sim::Scenario& s, const std::s
                      "a serial port that can be opened at " + std::to_string(serial.baud) + " " +
                          cfg::Framing(serial) + " (" + error + ")");
   }
-  if (const char* t = std::getenv("H8_LINKS")) {  // H8TEMP
-    return std::make_unique<H8TraceLink>(std::move(port), std::string(t) + key);  // H8TEMP
-  }  // H8TEMP
   return port;
 }
 
@@ -203,13 +169,7 @@ device::RobotDevices MakeDevices(const sim::Scenario& s, sim::SimRobot* twin) {
     const int i = static_cast<int>(side);
     const std::string name(device::ToString(side));
     if (const auto* arm = c.Backend<cfg::Val2Backend>("arm_" + name)) {
-      drivers::Val2Options o = arm->options;  // H8TEMP
-      if (const char* t = std::getenv("H8_TRACE")) {  // H8TEMP
-        auto f = std::make_shared<FILE*>(std::fopen((std::string(t) + name).c_str(), "w"));  // H8TEMP
-        const auto t0 = std::chrono::steady_clock::now();  // H8TEMP
-        o.trace = [f, t0](const std::string& m) { std::fprintf(*f, "%.3f %s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), m.c_str()); std::fflush(*f); };  // H8TEMP
-      }  // H8TEMP
-      dev.arm[i] = std::make_unique<drivers::Val2Arm>(OpenPort(s, "arm_" + name), o);  // H8TEMP
+      dev.arm[i] = std::make_unique<drivers::Val2Arm>(OpenPort(s, "arm_" + name), arm->options);
     }
     if (const auto* hand = c.Backend<cfg::SensorHandBackend>("hand_" + name)) {
       dev.hand[i] =
@@ -263,9 +223,8 @@ nlohmann::json CommandLogs(const device::RobotDevices& devices) {
     const int i = static_cast<int>(side);
     const std::string name(device::ToString(side));
     if (const auto* arm = dynamic_cast<const drivers::Val2Arm*>(devices.arm[i].get())) {
-      logs["arm_" + name] = LogJson(arm->command_log(), [](const std::string& line) {
-        return nlohmann::json(line);
-      });
+      logs["arm_" + name] =
+          LogJson(arm->command_log(), [](const std::string& line) { return nlohmann::json(line); });
     }
     if (const auto* hand = dynamic_cast<const drivers::SensorHandHand*>(devices.hand[i].get())) {
       logs["hand_" + name] =
@@ -288,11 +247,10 @@ nlohmann::json CommandLogs(const device::RobotDevices& devices) {
     board = leds->board().get();
   }
   if (board != nullptr) {
-    logs["laser_board"] =
-        LogJson(board->command_log(), [](const drivers::laser_board::Command& c) {
-          return nlohmann::json(Hex(drivers::laser_board::CommandPayload(c)) + "/" +
-                                std::to_string(static_cast<int>(drivers::laser_board::CodeOf(c))));
-        });
+    logs["laser_board"] = LogJson(board->command_log(), [](const drivers::laser_board::Command& c) {
+      return nlohmann::json(Hex(drivers::laser_board::CommandPayload(c)) + "/" +
+                            std::to_string(static_cast<int>(drivers::laser_board::CodeOf(c))));
+    });
   }
   return logs;
 }

@@ -87,7 +87,10 @@ class GraspTask::SinkCamera final : public device::StereoCamera {
     return s;
   }
 
-  int frames_in_flight() const override { return inner_->frames_in_flight(); }  // H8TEMP
+  // The camera's own latency: without it the tracker saw every camera as having none and
+  // looked at frames exposed before the LEDs switched (under line faults, a third of them).
+  int frames_in_flight() const override { return inner_->frames_in_flight(); }
+
   std::unique_ptr<device::StereoCamera> Release() { return std::move(inner_); }
 
  private:
@@ -375,6 +378,7 @@ bool GraspTask::Approach() {
   const grasp::GraspPlan& plan = *result_.plan;
   device::Arm& arm = dev_->ArmOf(plan.side);
   opening_m_ = plan.opening_m;
+  if (!DeviceOk(arm.SetSpeed(config_.arm_speed), ArmKey(), "speed")) return false;
   if (!DeviceOk(dev_->HandOf(plan.side).Open(plan.opening_m), HandKey(), "open")) return false;
   // Above the pre-grasp first, then down to it: the hand comes onto the box from above.
   for (const device::Joint6* q : {&plan.q_via, &plan.q_pre}) {

@@ -98,6 +98,10 @@ struct TaskConfig {
   int settle_frames = 4;
   /// Device time (s) spent flashing the LEDs to find them again before tracking_lost.
   double recovery_s = 3.0;
+  /// Fraction of its joint speed limits the planned arm moves at (Arm::SetSpeed, VAL II SPEED),
+  /// set as the approach begins: a controller keeps the speed it was left at (VAL's monitor
+  /// comes up at 50 %); the simulated arms run at their limits unless told otherwise.
+  double arm_speed = 1.0;
   double grip_force_n = 40.0;  ///< Hand::Close force (N)
   /// The grasp holds while the fingers stay at least this far apart (m): closed to less, they
   /// met with nothing between them.

@@ -119,12 +119,13 @@ TEST(CliTwinFaults, TheGraspSurvivesNoisyLinesAndEveryDeviceRanWhatItsDriverSent
       << twin.Log();
   const fs::path out = dir / "run";
   const fs::path logs_path = out / "commands.json";
-  const auto run = testing::RunHgrasp("run " + (twin.dir() / "scenario.yaml").string() +
-                                          " --out " + out.string() + " --lean --command-log " +
-                                          logs_path.string(),
-                                      300);
+  const auto run =
+      testing::RunHgrasp("run " + (twin.dir() / "scenario.yaml").string() + " --out " +
+                             out.string() + " --lean --command-log " + logs_path.string(),
+                         300);
   const json twin_report = twin.Stop();
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const json report = ReadJson(out / "report.json");
   ASSERT_TRUE(report.is_object()) << run.output;
   ASSERT_TRUE(twin_report.is_object()) << twin.Log();

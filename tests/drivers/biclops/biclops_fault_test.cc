@@ -133,8 +133,8 @@ TEST(BiclopsFaults, ThousandCommandsNoneLostRepeatedOrAltered) {
   const auto unconfirmed = std::count_if(driver_log.begin(), driver_log.end(),
                                          [](const auto& e) { return !e.confirmed; });
   std::printf("driver log: %zu entries, %td unconfirmed\n", driver_log.size(), unconfirmed);
-  EXPECT_TRUE(LogExplains<pmd::Command>(
-      driver_log, log, [](const pmd::Command& c, const PmdExecuted& x) {
+  EXPECT_TRUE(
+      LogExplains<pmd::Command>(driver_log, log, [](const pmd::Command& c, const PmdExecuted& x) {
         return c.axis == x.axis && c.opcode == x.opcode && pmd::CommandValue(c) == x.value;
       }));
 

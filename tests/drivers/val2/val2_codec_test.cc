@@ -350,22 +350,31 @@ TEST(Val2Where, RoundTripAndStrictness) {
   EXPECT_FALSE(ParseWhere(lines, &back));
 }
 
-TEST(Val2Where, JointsAloneParseAsStrictly) {
+TEST(Val2Where, JointsLineAloneParsesAsStrictly) {
   WhereReport r;
   r.location = RoundForWire({100, -200, 300, 10, 20, 30});
   r.joints = {1.5, -60.25, 30.125, 0.0, -45.001, 359.999};
-  std::array<std::string, 4> lines = FormatWhere(r);
+  const std::array<std::string, 4> lines = FormatWhere(r);
   std::array<double, 6> joints{};
-  ASSERT_TRUE(ParseWhereJoints(lines[2], lines[3], &joints));
+  ASSERT_TRUE(ParseWhereJoints(lines[3], &joints));
   EXPECT_EQ(joints, r.joints);
-  lines[1][5] = '#';  // the location damaged: the joints do not need it
-  EXPECT_TRUE(ParseWhereJoints(lines[2], lines[3], &joints));
-  EXPECT_FALSE(ParseWhereJoints(lines[0], lines[3], &joints));  // the location's header
-  std::string header = lines[2];
-  header[4] = 'X';
-  EXPECT_FALSE(ParseWhereJoints(header, lines[3], &joints));
-  EXPECT_FALSE(ParseWhereJoints(lines[2], lines[3] + " ", &joints));
-  EXPECT_FALSE(ParseWhereJoints(lines[2], lines[3].substr(1), &joints));
+  // No other line of a report passes for the joints' line (the location's X, Y, Z carry 2
+  // decimals), nor a damaged one.
+  for (int k = 0; k < 3; ++k) EXPECT_FALSE(ParseWhereJoints(lines[k], &joints)) << lines[k];
+  EXPECT_FALSE(ParseWhereJoints(lines[3] + " ", &joints));
+  EXPECT_FALSE(ParseWhereJoints(lines[3].substr(1), &joints));
+  std::string bad = lines[3];
+  bad[bad.size() - 2] = 'x';
+  EXPECT_FALSE(ParseWhereJoints(bad, &joints));
+  // Across random reports, including locations whose angles carry 3 decimals.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> deg(-359, 359), mm(-2000, 2000);
+  for (int n = 0; n < 1000; ++n) {
+    WhereReport w;
+    w.location = RoundForWire({mm(rng), mm(rng), mm(rng), deg(rng), deg(rng), deg(rng)});
+    const std::array<std::string, 4> l = FormatWhere(w);
+    EXPECT_FALSE(ParseWhereJoints(l[1], &joints)) << l[1];
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
