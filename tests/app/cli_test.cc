@@ -93,10 +93,29 @@ fs::path Fresh(const std::string& name) {
   return dir;
 }
 
+// `hgrasp twin` refuses bad input before it serves anything: exit 2 naming the option or file.
+TEST(CliHostileTest, TwinRefusesBadInputWithTheFieldNamed) {
+  const fs::path dir = Fresh("hgrasp_cli_twin_bad");
+  struct Case {
+    std::string args, expected;
+  };
+  for (const Case& c : {Case{"--rate 2 " + kDefault, "--rate"},
+                        Case{"--rate 0 " + kDefault, "--rate"},
+                        Case{"--corrupt 0.7 " + kDefault, "--corrupt"},
+                        Case{"--at soon:cut " + kDefault, "--at"},
+                        Case{(dir / "missing.yaml").string(), "missing.yaml"}}) {
+    const Result r = RunHgrasp("twin --dir " + (dir / "ports").string() + " " + c.args);
+    EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "ports" / "ready"));
+  }
+  fs::remove_all(dir);
+}
+
 // "hgrasp frobnicate" said only that a subcommand is required; "hgrasp twin --help" printed the
-// main help and exited 0.
+// main help and exited 0 (before `twin` was a command; "simulate" stands in for it now).
 TEST(CliHostileTest, AWordThatIsNoCommandIsNamed) {
-  for (const char* args : {"frobnicate", "twin --help", "twin scenarios/default.yaml"}) {
+  for (const char* args : {"frobnicate", "simulate --help", "simulate scenarios/default.yaml"}) {
     const Result r = RunHgrasp(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     const std::string word = std::string(args).substr(0, std::string(args).find(' '));
