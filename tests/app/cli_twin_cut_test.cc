@@ -28,11 +28,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-json ReadJson(const fs::path& p) {
-  std::ifstream f(p);
-  if (!f) return nullptr;
-  return json::parse(f, nullptr, /*allow_exceptions=*/false);
-}
+using testing::ReadJson;
 
 struct Watched {
   int status = -1;

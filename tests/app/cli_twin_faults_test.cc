@@ -36,11 +36,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json ReadJson(const fs::path& p) {
-  std::ifstream f(p);
-  if (!f) return nullptr;
-  return json::parse(f, nullptr, /*allow_exceptions=*/false);
-}
+using testing::ReadJson;
 
 std::string Hex(const std::vector<std::uint8_t>& bytes) {
   static const char* digits = "0123456789abcdef";

@@ -30,11 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json ReadJson(const fs::path& p) {
-  std::ifstream f(p);
-  if (!f) return nullptr;
-  return json::parse(f, nullptr, /*allow_exceptions=*/false);
-}
+using testing::ReadJson;
 
 Eigen::Vector3d Vec(const json& j) { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
 

@@ -25,6 +25,13 @@ inline const char* kFastHoming =
     "tilt: {homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}, "
     "verge: {homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}}";
 
+/// A JSON file (a report, twin.json); null when it is missing or does not parse.
+inline nlohmann::json ReadJson(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  if (!f) return nullptr;
+  return nlohmann::json::parse(f, nullptr, /*allow_exceptions=*/false);
+}
+
 class TwinProcess {
  public:
   /// Starts `hgrasp twin SCENARIO --dir DIR --camera-ports 0 0 --head-options FAST EXTRA...`
