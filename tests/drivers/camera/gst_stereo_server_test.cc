@@ -193,11 +193,22 @@ TEST(GstStereoServer, TheDriverPairsTheCamerasByFrameNumberAndCountsGaps) {
   RecordingBoard board;
   auto camera = Connect(*server, ClientConfig(*server), board.Source());
   ASSERT_TRUE(camera);
-  // The right camera's frames 1 and 2 are lost: the left's are dropped to pair at 3.
-  for (std::uint64_t n : {1, 2, 3}) ASSERT_TRUE(server->Push(0, Pattern(n, 0), n, 0.04 * n));
-  ASSERT_TRUE(server->Push(1, Pattern(3, 1), 3, 0.12));
+  // The right camera's frames 1 and 2 are lost: the left's are dropped to pair at 3. Each
+  // appsink holds only the newest frame, so the frames go out one at a time while Grab waits
+  // for them (pushed back to back, the left's 1 and 2 were replaced in its appsink before the
+  // driver saw them, and nothing was unpaired).
   device::StereoFrame frame;
-  ASSERT_EQ(camera->Grab(&frame), Status::kOk) << camera->last_error();
+  std::atomic<Status> grabbed{Status::kTimeout};
+  std::thread grab([&] { grabbed = camera->Grab(&frame); });
+  const auto push = [&](int c, std::uint64_t n) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(120));
+    return server->Push(c, Pattern(n, c), n, 0.04 * static_cast<double>(n));
+  };
+  // Grab holds left 1 and waits for the right: right 3 comes; left 1 is dropped, then left 2.
+  const bool pushed = push(0, 1) && push(1, 3) && push(0, 2) && push(0, 3);
+  grab.join();
+  ASSERT_TRUE(pushed);
+  ASSERT_EQ(grabbed.load(), Status::kOk) << camera->last_error();
   EXPECT_TRUE(Same(frame.left, Pattern(3, 0)));
   EXPECT_TRUE(Same(frame.right, Pattern(3, 1)));
   EXPECT_EQ(board.asked.back(), std::nullopt);  // latch_pairing latest: the newest latch
