@@ -411,6 +411,17 @@ TrackerStatus GripperTracker::Initialise(device::Leds& leds, device::StereoCamer
   return TrackerStatus::kNotFound;
 }
 
+void GripperTracker::ExpectMove(const Pose3& X_EEnew, double t_s) {
+  if (!tracking_) return;
+  const Pose3 X_CE0 = filter_.pose();
+  filter_.MoveBy(X_EEnew, options_.move_error);
+  last_t_s_ = std::max(last_t_s_, t_s);
+  const Pose3 X_moved = filter_.pose() * X_CE0.inverse();
+  for (std::optional<Eigen::Vector3d>& p : last_leds_) {
+    if (p) p = X_moved * *p;
+  }
+}
+
 void GripperTracker::CarryThroughCameraMove(const Pose3& X_CnewC) {
   if (filter_.initialised()) filter_.ChangeFrame(X_CnewC);
   for (std::optional<Eigen::Vector3d>& p : last_leds_) {

@@ -70,6 +70,10 @@ struct GripperTrackerOptions {
   double max_nis = 100.0;
   /// lost() after this many frames in a row without a pose measurement (10 frames = 0.4 s).
   int max_missed_frames = 10;
+  /// Error (std dev per axis) of a relative move the arm made unwatched (ExpectMove): the
+  /// Puma repeats a small move to well under a millimetre; this allows for the arm's kinematic
+  /// model being a little off the true arm over the move.
+  PoseMeasurementNoise move_error = {0.003, 0.03};
 };
 
 enum class TrackerStatus {
@@ -104,6 +108,15 @@ class GripperTracker {
   /// from the new one (servo::HeadTracker::X_CnewC). Carries the filter's state into the new
   /// frame so that tracking goes on without a jump. Nothing to do before Initialise.
   void CarryThroughCameraMove(const Pose3& X_CnewC);
+
+  /// The arm moved the gripper by X_EEnew (in its own frame, as Arm::MoveRelative is told) and
+  /// is at rest at t_s, the time of the frame that showed it still; the frames of the move were
+  /// not tracked. The filter's pose becomes the moved one (GripperTrackerOptions::move_error
+  /// added) at rest at t_s. Tracking the move's frames instead fails where the task reads a
+  /// 9600-baud arm between frames: they come 0.3 s apart, the first fuses the move's speed, and
+  /// the constant-velocity prediction runs on past a gripper that has long stopped (80 mm in a
+  /// twin run, and the tracker was lost). Nothing to do unless tracking().
+  void ExpectMove(const Pose3& X_EEnew, double t_s);
 
   bool lost() const { return lost_; }
   /// True after a successful Initialise, until lost.

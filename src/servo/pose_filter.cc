@@ -104,6 +104,35 @@ void PoseFilter::Reset() {
   P_.setIdentity();
 }
 
+void PoseFilter::MoveBy(const Pose3& X_EEnew, const PoseMeasurementNoise& error) {
+  HGRASP_DEMAND_MSG(initialised_, "PoseFilter::MoveBy before Initialise");
+  CheckStd(error.position_std, "PoseMeasurementNoise.position_std");
+  CheckStd(error.rotation_std, "PoseMeasurementNoise.rotation_std");
+  if (!X_EEnew.matrix().allFinite()) {
+    throw InputError("", "X_EEnew", "non-finite", "a finite rigid transform");
+  }
+  // p' = p + R t and R' = R R_EEnew; with R_true = Exp(dtheta) R, dp' = dp - [R t]x dtheta and
+  // dtheta' = dtheta.
+  const Eigen::Vector3d Rt = q_ * X_EEnew.translation();
+  p_ += Rt;
+  q_ = (q_ * Eigen::Quaterniond(X_EEnew.rotation())).normalized();
+  Matrix12d J = Matrix12d::Identity();
+  J.block<3, 3>(0, 6) = -Skew(Rt);
+  P_ = J * P_ * J.transpose();
+  P_.block<3, 3>(0, 0).diagonal().array() += error.position_std * error.position_std;
+  P_.block<3, 3>(6, 6).diagonal().array() += error.rotation_std * error.rotation_std;
+  // At rest again: zero velocities, as uncertain as they were, uncorrelated with the new pose.
+  v_.setZero();
+  w_.setZero();
+  const Eigen::Matrix3d Pv = P_.block<3, 3>(3, 3), Pw = P_.block<3, 3>(9, 9);
+  for (int block : {3, 9}) {
+    P_.middleRows(block, 3).setZero();
+    P_.middleCols(block, 3).setZero();
+  }
+  P_.block<3, 3>(3, 3) = Pv;
+  P_.block<3, 3>(9, 9) = Pw;
+}
+
 void PoseFilter::Predict(double dt) {
   HGRASP_DEMAND_MSG(initialised_, "PoseFilter::Predict before Initialise");
   if (!std::isfinite(dt) || dt < 0.0) {

@@ -87,6 +87,12 @@ class PoseFilter {
   /// Fuses a measured position only (3 dof), e.g. the LEDs' mean. @return NIS (3 dof).
   double UpdatePosition(const Eigen::Vector3d& p_CE, double position_std);
 
+  /// The gripper was moved by X_EEnew, expressed in its own frame (a relative move commanded to
+  /// the arm, not watched): the pose becomes X_CE X_EEnew with its covariance carried, plus the
+  /// move's own error (`error`, per axis); the velocities become zero (the arm has stopped
+  /// again), as uncertain as they were and uncorrelated with the new pose.
+  void MoveBy(const Pose3& X_EEnew, const PoseMeasurementNoise& error);
+
   /// Re-expresses the state in another frame N, given X_NC (the camera moved: N is the camera's
   /// new pose, X_NC where the old one is seen from it). Position, velocity, orientation,
   /// angular velocity and the covariance (all in C, left rotation error) are carried exactly.

@@ -297,19 +297,33 @@ bool GraspTask::AimHead(const Eigen::Vector3d& p_C, bool* moved) {
   return true;
 }
 
-device::Status GraspTask::MoveRelative(device::Arm& arm, const Pose3& X_EEnew) {
+device::Status GraspTask::MoveRelative(device::Arm& arm, const Pose3& X_EEnew, Pose3* moved) {
   // The controller refuses a move whose end it cannot solve for (near a wrist singularity, its
   // local solver may not converge): try the same direction, shorter, before giving up.
   Pose3 step = X_EEnew;
   device::Status s = device::Status::kRejected;
   for (int attempt = 0; attempt < 4; ++attempt) {
     s = arm.MoveRelative(step);
+    *moved = step;
     if (s != device::Status::kRejected) return s;
     const Eigen::AngleAxisd turn(step.linear());
     step.linear() = Eigen::AngleAxisd(0.5 * turn.angle(), turn.axis()).toRotationMatrix();
     step.translation() *= 0.5;
   }
   return s;
+}
+
+bool GraspTask::MoveAndWait(const Pose3& X_EEnew, std::string_view what,
+                            std::string_view refused) {
+  Pose3 moved = Pose3::Identity();
+  const device::Status s = MoveRelative(dev_->ArmOf(result_.plan->side), X_EEnew, &moved);
+  if (s == device::Status::kRejected) return Fail(Failure::kUnreachable, std::string(refused));
+  if (!DeviceOk(s, ArmKey(), "move")) return false;
+  if (!WaitUntil([this](bool* still) { return ArmStill(still); }, what, /*track=*/false)) {
+    return false;
+  }
+  tracker_->ExpectMove(moved, last_frame_.t_s);
+  return true;
 }
 
 bool GraspTask::Look() {
@@ -401,7 +415,6 @@ bool GraspTask::ServoTo(const Pose3& X_WT, std::string name, std::string_view re
   ServoPhase phase;
   phase.name = std::move(name);
   const double t0 = last_frame_.t_s;
-  device::Arm& arm = dev_->ArmOf(result_.plan->side);
   for (;;) {
     // The arm is still: let the filter settle on it.
     for (int k = 0; k < config_.settle_frames; ++k) {
@@ -433,14 +446,12 @@ bool GraspTask::ServoTo(const Pose3& X_WT, std::string name, std::string_view re
     bool moved = false;
     if (!AimHead(tracker_->pose().translation(), &moved)) return false;
     if (moved) continue;
-    const device::Status s = MoveRelative(arm, cmd.X_EEnew);
-    if (s == device::Status::kRejected) {
-      return Fail(Failure::kUnreachable,
-                  "the arm refused the servo move towards the " + phase.name + " (out of reach)");
-    }
-    if (!DeviceOk(s, ArmKey(), "move")) return false;
     ++phase.iterations;
-    if (!WaitUntil([this](bool* still) { return ArmStill(still); }, "arm move", true)) return false;
+    if (!MoveAndWait(cmd.X_EEnew, "arm move",
+                     "the arm refused the servo move towards the " + phase.name +
+                         " (out of reach)")) {
+      return false;
+    }
   }
   phase.sim_s = last_frame_.t_s - t0;
   result_.servo.push_back(phase);
@@ -505,12 +516,7 @@ bool GraspTask::Lift() {
   for (int k = 0; k < steps; ++k) {
     Pose3 step = Pose3::Identity();
     step.translation() = up.translation() / steps;
-    const device::Status s = MoveRelative(dev_->ArmOf(side), step);
-    if (s == device::Status::kRejected) {
-      return Fail(Failure::kUnreachable, "the arm refused the lift (out of reach)");
-    }
-    if (!DeviceOk(s, ArmKey(), "move")) return false;
-    if (!WaitUntil([this](bool* still) { return ArmStill(still); }, "lift", true)) return false;
+    if (!MoveAndWait(step, "lift", "the arm refused the lift (out of reach)")) return false;
   }
   // Hold it up.
   const double t_up = last_frame_.t_s;

@@ -13,7 +13,10 @@
 ///
 /// Each servo iteration: the arm is still; the tracker has fused `settle_frames` frames since it
 /// stopped; the command X_EE' comes from the filter's pose and the target; it goes to
-/// Arm::MoveRelative; frames are tracked while the arm moves. When the gripper strays more than
+/// Arm::MoveRelative; the frames of the move only keep time, and once the arm is still the
+/// tracker takes the gripper as moved by the command (GripperTracker::ExpectMove: against the
+/// real drivers the frames of a move come 0.3 s apart, one per 9600-baud WHERE, too sparse to
+/// track a move through). When the gripper strays more than
 /// the head tracker's dead band from the cameras' axis, the head re-centres it (between
 /// iterations, arm still) and the target and the filter are carried into the new camera frame.
 /// When tracking is lost, the LEDs are flashed again (GripperTracker::Initialise) until they are
@@ -264,8 +267,11 @@ class GraspTask {
   /// carries the target and the filter into the new camera frame.
   bool AimHead(const Eigen::Vector3d& p_C, bool* moved);
   bool ServoTo(const Pose3& X_WT, std::string name, std::string_view reached_moment);
-  /// Arm::MoveRelative; when refused, the same move halved, up to three times.
-  device::Status MoveRelative(device::Arm& arm, const Pose3& X_EEnew);
+  /// Arm::MoveRelative; when refused, the same move halved, up to three times. *moved: the move
+  /// the arm took (X_EEnew or a part of it), when it took one.
+  device::Status MoveRelative(device::Arm& arm, const Pose3& X_EEnew, Pose3* moved);
+  /// MoveRelative, then frames until the arm is still; the tracker takes the move on trust.
+  bool MoveAndWait(const Pose3& X_EEnew, std::string_view what, std::string_view refused);
 
   device::RobotDevices* dev_;
   RobotModel model_;

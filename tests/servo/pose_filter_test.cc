@@ -275,6 +275,38 @@ TEST(PoseFilterTest, BadInputThrows) {
   EXPECT_THROW(filter.Update(Pose3::Identity(), not_pd), InputError);
 }
 
+// By hand: a gripper turned 90 deg about z in C, moved 10 mm along its own x, ends 10 mm along
+// C's y; a rotation error about z then moves that end sideways (dp' = dp - [R t]x dtheta), so
+// the end's x variance gains (10 mm)^2 var(theta_z); the move's own error adds; velocities
+// are zero, as uncertain as before, and uncorrelated with the pose.
+TEST(PoseFilterTest, MoveByCarriesThePoseAndItsUncertaintyThroughARelativeMove) {
+  PoseFilter filter(SmoothOptions());
+  Pose3 X_CE = Pose3::Identity();
+  X_CE.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  X_CE.translation() = Eigen::Vector3d(0.1, 0.2, 0.5);
+  filter.Initialise(X_CE, {0.001, 0.01});
+  Pose3 move = Pose3::Identity();
+  move.translation() = Eigen::Vector3d(0.01, 0.0, 0.0);
+  move.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  filter.MoveBy(move, {0.002, 0.03});
+  EXPECT_LT((filter.position() - Eigen::Vector3d(0.1, 0.21, 0.5)).norm(), 1e-12);
+  EXPECT_LT((filter.pose().linear() - (X_CE.linear() * move.linear())).norm(), 1e-12);
+  const PoseFilter::Matrix12d& P = filter.covariance();
+  EXPECT_NEAR(P(0, 0), 1e-6 + 0.01 * 0.01 * 1e-4 + 4e-6, 1e-15);  // x: dp, [R t]x dtheta_z, move
+  EXPECT_NEAR(P(1, 1), 1e-6 + 4e-6, 1e-15);                      // y: along the move
+  EXPECT_NEAR(P(8, 8), 1e-4 + 9e-4, 1e-15);                      // theta_z
+  EXPECT_NEAR(P(0, 8), -0.01 * 1e-4, 1e-15);                     // x and theta_z correlate
+  EXPECT_EQ(filter.velocity(), Eigen::Vector3d::Zero());
+  EXPECT_EQ(filter.angular_velocity(), Eigen::Vector3d::Zero());
+  EXPECT_TRUE((P.block<3, 3>(3, 0).isZero(0.0)));
+  EXPECT_NEAR(P(3, 3), filter.options().initial_velocity_std * filter.options().initial_velocity_std,
+              1e-15);  // as uncertain as at Initialise
+  Pose3 bad = move;
+  bad.translation().x() = NAN;
+  EXPECT_THROW(filter.MoveBy(bad, {}), InputError);
+  EXPECT_THROW(filter.MoveBy(move, {0.0, 0.01}), InputError);
+}
+
 TEST(RotationMapsTest, ExpAndLogAreInverse) {
   for (const Eigen::Vector3d& v : {Eigen::Vector3d(0.1, -0.2, 0.3), Eigen::Vector3d(1e-14, 0, 0),
                                    Eigen::Vector3d(0, 3.1, 0)}) {
