@@ -14,11 +14,27 @@
 /// Thread-safe: a driver's I/O thread writes while the composition root takes a snapshot.
 
 #include <cstddef>
+#include <cstdint>
 #include <mutex>
+#include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
 namespace hgrasp::drivers {
+
+/// A byte command as the logs' JSON spells it (hgrasp run --command-log, the twin's
+/// twin.json): lowercase hex, two digits a byte.
+inline std::string HexBytes(std::span<const std::uint8_t> bytes) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string s;
+  s.reserve(2 * bytes.size());
+  for (std::uint8_t b : bytes) {
+    s.push_back(kDigits[b >> 4]);
+    s.push_back(kDigits[b & 15]);
+  }
+  return s;
+}
 
 template <class Command>
 class CommandLog {

@@ -39,7 +39,8 @@ bool LineFaults::InDropout(Clock::time_point now) {
     ++counts_.dropouts;
     std::exponential_distribution<double> gap(plan_.dropouts_per_s);
     next_dropout_ = dropout_end_ + std::chrono::duration_cast<Clock::duration>(
-                                       std::chrono::duration<double>(gap(rng_)));
+                                       std::chrono::duration<double>(plan_.min_dropout_gap_s +
+                                                                     gap(rng_)));
   }
   return now < dropout_end_;
 }

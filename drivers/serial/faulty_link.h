@@ -20,6 +20,10 @@ struct FaultPlan {
   double garbage_probability = 0.0;  ///< per byte and direction: a random byte inserted after it
   double dropouts_per_s = 0.0;       ///< mean rate at which dropouts start (Poisson)
   double dropout_s = 0.2;            ///< length of a dropout: every byte, both ways, is lost
+  /// The line works at least this long between two dropouts (s). At 0, a dropout may follow
+  /// the last at once: two make one longer outage (0.4 s of two 0.2 s dropouts), which a driver
+  /// rightly reports as a lost link.
+  double min_dropout_gap_s = 0.0;
   std::uint64_t seed = 1;
 };
 

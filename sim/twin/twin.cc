@@ -10,6 +10,7 @@
 #include "common/paths.h"
 #include "robot/arm_kinematics.h"
 #include "robot/kinematic_tree.h"
+#include "serial/command_log.h"
 
 namespace hgrasp::sim {
 
@@ -19,16 +20,6 @@ using json = nlohmann::json;
 
 /// Biclops: 12000 counts per joint turn (BiclopsDefault.cfg; drivers/emulators/biclops_emulator.h).
 constexpr double kHeadRadPerCount = 2.0 * kPi / 12000.0;
-
-std::string Hex(const std::vector<std::uint8_t>& bytes) {
-  static const char* digits = "0123456789abcdef";
-  std::string s;
-  for (std::uint8_t b : bytes) {
-    s.push_back(digits[b >> 4]);
-    s.push_back(digits[b & 15]);
-  }
-  return s;
-}
 
 json PoseJson(const Pose3& X) {
   json R = json::array();
@@ -354,7 +345,7 @@ json Twin::Report() const {
       }
     } else if (const auto* h = dynamic_cast<const drivers::SensorHandEmulator*>(&d)) {
       for (const auto& e : h->log()) {
-        log.push_back(Hex(drivers::sensorhand::Encode(e.command)));
+        log.push_back(drivers::HexBytes(drivers::sensorhand::Encode(e.command)));
         log_t.push_back(e.t_s);
       }
     } else if (const auto* b = dynamic_cast<const drivers::BiclopsEmulator*>(&d)) {
@@ -364,7 +355,7 @@ json Twin::Report() const {
       }
     } else if (const auto* lb = dynamic_cast<const drivers::LaserBoardEmulator*>(&d)) {
       for (const auto& e : lb->log()) {
-        log.push_back(Hex(drivers::laser_board::CommandPayload(e.command)) + "/" +
+        log.push_back(drivers::HexBytes(drivers::laser_board::CommandPayload(e.command)) + "/" +
                       std::to_string(static_cast<int>(drivers::laser_board::CodeOf(e.command))));
         log_t.push_back(e.t_s);
       }

@@ -169,6 +169,9 @@ struct TwinCommandOptions {
   double corrupt = 0.0;         ///< per byte and direction, on every serial line
   double dropouts_per_s = 0.0;  ///< mean rate of dropouts on every serial line
   double dropout_s = 0.2;       ///< length of a dropout (s)
+  /// Least time a line works between two dropouts (s); unset: one dropout's length, so that
+  /// every outage is one dropout long (FaultPlan::min_dropout_gap_s).
+  std::optional<double> dropout_gap_s;
   std::vector<std::string> at;  ///< "SECONDS:COMMAND" (Twin::Control) at that twin time
   std::string head_options;     ///< the Biclops driver's options in devices.yaml (YAML flow)
 };

@@ -14,6 +14,7 @@
 #include "laser_board/board_devices.h"
 #include "laser_board/laser_board.h"
 #include "sensorhand/sensorhand_hand.h"
+#include "serial/command_log.h"
 #include "serial/serial_port.h"
 #include "val2/val2_arm.h"
 
@@ -43,17 +44,6 @@ std::unique_ptr<drivers::ByteLink> OpenPort(const sim::Scenario& s, const std::s
                          cfg::Framing(serial) + " (" + error + ")");
   }
   return port;
-}
-
-// Lowercase hex, two digits a byte (as the twin's report writes frames).
-std::string Hex(const std::vector<std::uint8_t>& bytes) {
-  static const char* digits = "0123456789abcdef";
-  std::string s;
-  for (std::uint8_t b : bytes) {
-    s.push_back(digits[b >> 4]);
-    s.push_back(digits[b & 15]);
-  }
-  return s;
 }
 
 // A driver's command log: each entry as `encode` gives it, an unconfirmed one wrapped as
@@ -229,7 +219,7 @@ nlohmann::json CommandLogs(const device::RobotDevices& devices) {
     if (const auto* hand = dynamic_cast<const drivers::SensorHandHand*>(devices.hand[i].get())) {
       logs["hand_" + name] =
           LogJson(hand->command_log(), [](const drivers::sensorhand::Command& c) {
-            return nlohmann::json(Hex(drivers::sensorhand::Encode(c)));
+            return nlohmann::json(drivers::HexBytes(drivers::sensorhand::Encode(c)));
           });
     }
   }
@@ -248,7 +238,7 @@ nlohmann::json CommandLogs(const device::RobotDevices& devices) {
   }
   if (board != nullptr) {
     logs["laser_board"] = LogJson(board->command_log(), [](const drivers::laser_board::Command& c) {
-      return nlohmann::json(Hex(drivers::laser_board::CommandPayload(c)) + "/" +
+      return nlohmann::json(drivers::HexBytes(drivers::laser_board::CommandPayload(c)) + "/" +
                             std::to_string(static_cast<int>(drivers::laser_board::CodeOf(c))));
     });
   }

@@ -261,6 +261,9 @@ int main(int argc, char** argv) {
   cmd_twin->add_option("--dropouts", twin.dropouts_per_s,
                        "fault: mean dropouts per second on every serial line (both ways silent)");
   cmd_twin->add_option("--dropout-s", twin.dropout_s, "fault: length of a dropout (s, default 0.2)");
+  cmd_twin->add_option("--dropout-gap-s", twin.dropout_gap_s,
+                       "fault: least time a line works between two dropouts (s, default: one "
+                       "dropout's length; 0 lets two make one longer outage)");
   cmd_twin->add_option("--at", twin.at,
                        "SECONDS:COMMAND: run a control command at that twin time (repeatable): "
                        "cut|cut_tx|mend|vanish|reappear DEVICE, stop|resume cameras");

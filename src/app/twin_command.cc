@@ -83,6 +83,10 @@ int Twin(const TwinCommandOptions& o) {
   if (!(o.dropout_s > 0.0 && o.dropout_s <= 5.0)) {
     throw InputError("", "--dropout-s", std::to_string(o.dropout_s), "seconds, > 0 and <= 5");
   }
+  if (o.dropout_gap_s && !(*o.dropout_gap_s >= 0.0 && *o.dropout_gap_s <= 60.0)) {
+    throw InputError("", "--dropout-gap-s", std::to_string(*o.dropout_gap_s),
+                     "seconds, 0-60");
+  }
   std::vector<Scheduled> schedule = ParseSchedule(o.at);
   sim::Scenario scenario = sim::LoadScenario(o.scenario);
   std::error_code ec;
@@ -109,6 +113,7 @@ int Twin(const TwinCommandOptions& o) {
     plan.corrupt_probability = o.corrupt;
     plan.dropouts_per_s = o.dropouts_per_s;
     plan.dropout_s = o.dropout_s;
+    plan.min_dropout_gap_s = o.dropout_gap_s.value_or(o.dropout_s);
     plan.seed = scenario.seed * 1000003u + 17u;
     options.faults = plan;
   }

@@ -2,8 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <deque>
+#include <optional>
 #include <thread>
+#include <vector>
 
 namespace hgrasp::drivers {
 namespace {
@@ -128,6 +133,54 @@ TEST(FaultyLink, DropoutsLastTheirLengthAndRecur) {
   const double lost = static_cast<double>(c.dropped) / sent;
   EXPECT_GT(lost, 0.15);
   EXPECT_LT(lost, 0.55);
+}
+
+// With a least gap, the line works at least that long between two dropouts: each outage is one
+// dropout long. (Without it, at 50 dropouts/s a third of the gaps are under 7 ms.)
+TEST(FaultyLink, DropoutsKeepTheirLeastGap) {
+  for (const double min_gap : {0.0, 0.03}) {
+    SCOPED_TRACE(min_gap);
+    LineFaults faults(FaultPlan{
+        .dropouts_per_s = 50.0, .dropout_s = 0.03, .min_dropout_gap_s = min_gap, .seed = 9});
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    // The passed bytes' times, and the longest wait between two samples.
+    std::vector<std::pair<double, bool>> samples;
+    while (Clock::now() - t0 < std::chrono::seconds(1)) {
+      const std::uint8_t b[] = {1};
+      std::vector<std::uint8_t> out;
+      faults.Pass(b, false, &out);
+      samples.emplace_back(std::chrono::duration<double>(Clock::now() - t0).count(), !out.empty());
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    double step = 0.0;
+    for (std::size_t k = 1; k < samples.size(); ++k) {
+      step = std::max(step, samples[k].first - samples[k - 1].first);
+    }
+    // Each run of passed bytes between two dropouts: from its first byte to its last.
+    std::vector<double> gaps;
+    std::optional<double> first, last;
+    bool after_dropout = false;
+    for (const auto& [t, passed] : samples) {
+      if (passed) {
+        if (!first) first = t;
+        last = t;
+      } else {
+        if (first && after_dropout) gaps.push_back(*last - *first);
+        first.reset();
+        after_dropout = true;
+      }
+    }
+    ASSERT_GE(gaps.size(), 5u);
+    const double shortest = *std::min_element(gaps.begin(), gaps.end());
+    std::printf("least gap %.0f ms: %zu gaps, the shortest %.1f ms (samples up to %.1f ms apart)\n",
+                1e3 * min_gap, gaps.size(), 1e3 * shortest, 1e3 * step);
+    if (min_gap > 0.0) {
+      EXPECT_GE(shortest, min_gap - 2.0 * step);
+    } else {
+      EXPECT_LT(shortest, 0.01);
+    }
+  }
 }
 
 }  // namespace
