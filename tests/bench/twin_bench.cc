@@ -27,116 +27,15 @@
 #include "sim/twin/twin.h"
 #include "val2/val2_arm.h"
 
+#include "../sim/twin/twin_rig.h"
+
 namespace hgrasp::sim {
 namespace {
 
-namespace fs = std::filesystem;
 using device::Status;
-using Clock = std::chrono::steady_clock;
-
-double Since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-int Baud(const char* key) {
-  for (const TwinLineSpec& s : kTwinLines) {
-    if (std::string(s.key) == key) return s.baud;
-  }
-  return 0;
-}
-
-// The twin on a thread, its camera server, and the real drivers on its wires. `ok` false (and
-// `error` why) when something did not open.
-struct TwinRig {
-  std::string dir;
-  std::unique_ptr<drivers::GstStereoServer> server;
-  std::unique_ptr<Twin> twin;
-  std::atomic<bool> stop{false};
-  std::thread runner;
-  std::shared_ptr<drivers::LaserBoard> board;
-  std::unique_ptr<drivers::BoardStripeLaser> laser;
-  std::unique_ptr<drivers::GstStereoCamera> camera;
-  std::unique_ptr<drivers::Val2Arm> arm;
-  bool ok = false;
-  std::string error;
-
-  TwinRig() {
-    setenv("HGRASP_ROOT", HGRASP_SOURCE_ROOT, 0);
-    std::string t = (fs::temp_directory_path() / "twin_bench_XXXXXX").string();
-    if (::mkdtemp(t.data()) == nullptr) {
-      error = "no temporary folder";
-      return;
-    }
-    dir = t;
-    server = drivers::GstStereoServer::Open("127.0.0.1", 0, 0, 320, 240, &error);
-    if (!server) return;
-    drivers::GstStereoServer* srv = server.get();
-    TwinOptions options;
-    options.dir = dir;
-    twin = std::make_unique<Twin>(
-        LoadScenario(std::string(HGRASP_SOURCE_ROOT) + "/scenarios/default.yaml"), options,
-        [srv](int camera, const cv::Mat& bgr, std::uint64_t frame, double t) {
-          srv->Push(camera, bgr, frame, t);
-        });
-    runner = std::thread([this] { twin->Run([this] { return !stop.load(); }); });
-    auto open = [this](const char* key) -> std::unique_ptr<drivers::SerialPort> {
-      drivers::SerialConfig serial;
-      serial.port = dir + "/" + key;
-      serial.baud = Baud(key);
-      return drivers::SerialPort::Open(serial, &error);
-    };
-    std::unique_ptr<drivers::SerialPort> board_port = open("laser_board");
-    if (!board_port) return;
-    board = std::make_shared<drivers::LaserBoard>(std::move(board_port));
-    laser = std::make_unique<drivers::BoardStripeLaser>(board);
-    std::unique_ptr<drivers::SerialPort> arm_port = open("arm_right");
-    if (!arm_port) return;
-    arm = std::make_unique<drivers::Val2Arm>(std::move(arm_port));
-    drivers::LatchSource latch = [b = board](std::optional<std::uint32_t> frame,
-                                             drivers::ExposureLatch* out) {
-      drivers::FrameLatch l;
-      const Status status = frame ? b->FrameLatchOf(*frame, &l) : b->LatestFrameLatch(&l);
-      out->frame = l.frame;
-      out->encoder_count = l.encoder_count;
-      out->laser_on = l.laser_on;
-      return status;
-    };
-    drivers::GstCameraConfig config;
-    config.left = server->ClientPipeline(0);
-    config.right = server->ClientPipeline(1);
-    config.latch_pairing = drivers::LatchPairing::kOffset;
-    camera = drivers::GstStereoCamera::Open(config, latch, nullptr, &error);
-    if (!camera) return;
-    // The streams connect: the first frames that come through.
-    device::StereoFrame frame;
-    int got = 0;
-    const Clock::time_point t0 = Clock::now();
-    while (got < 3 && Since(t0) < 10.0) {
-      if (camera->Grab(&frame) == Status::kOk) ++got;
-    }
-    if (got < 3) {
-      error = "no frames from the twin within 10 s: " + camera->last_error();
-      return;
-    }
-    ok = true;
-  }
-  // Stops the twin (its exposures and logs may be read after).
-  void StopTwin() {
-    stop = true;
-    if (runner.joinable()) runner.join();
-  }
-  ~TwinRig() {
-    camera.reset();
-    arm.reset();
-    laser.reset();
-    board.reset();
-    StopTwin();
-    twin.reset();
-    server.reset();
-    std::error_code ec;
-    if (!dir.empty()) fs::remove_all(dir, ec);
-  }
-};
+using testing::Clock;
+using testing::Since;
+using testing::TwinRig;
 
 // (a) Frames through to the driver for ~8 s, the laser on and sweeping back and forth between
 // its limits at the argument's speed (counts/s): 400, the scanner's sweep (4800 counts in 300
@@ -148,7 +47,8 @@ struct TwinRig {
 // llvmpipe, more when the CPUs are busy), and overruns.
 void BM_TwinFramesToTheDriver(benchmark::State& state) {
   for (auto _ : state) {
-    TwinRig rig;
+    setenv("HGRASP_ROOT", HGRASP_SOURCE_ROOT, 0);
+    TwinRig rig(std::string(HGRASP_SOURCE_ROOT) + "/scenarios/default.yaml");
     if (!rig.ok) {
       state.SkipWithError(rig.error.c_str());
       return;
@@ -211,7 +111,8 @@ BENCHMARK(BM_TwinFramesToTheDriver)
 // one the camera's one-frame queue kept during the wait.
 void BM_TwinExposureToArmCommand(benchmark::State& state) {
   for (auto _ : state) {
-    TwinRig rig;
+    setenv("HGRASP_ROOT", HGRASP_SOURCE_ROOT, 0);
+    TwinRig rig(std::string(HGRASP_SOURCE_ROOT) + "/scenarios/default.yaml");
     if (!rig.ok) {
       state.SkipWithError(rig.error.c_str());
       return;

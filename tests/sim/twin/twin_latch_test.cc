@@ -26,53 +26,14 @@
 #include "laser_board/laser_board.h"
 #include "serial/serial_port.h"
 #include "sim/twin/twin.h"
+#include "twin_rig.h"
 
 namespace hgrasp::sim {
 namespace {
 
-namespace fs = std::filesystem;
 using device::Status;
-using Clock = std::chrono::steady_clock;
-
-double Since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-int Baud(const char* key) {
-  for (const TwinLineSpec& s : kTwinLines) {
-    if (std::string(s.key) == key) return s.baud;
-  }
-  return 0;
-}
-
-// A temporary folder for the twin's port links, removed at the end.
-struct TempDir {
-  std::string path;
-  TempDir() {
-    std::string t = (fs::temp_directory_path() / "twin_latch_XXXXXX").string();
-    if (::mkdtemp(t.data()) != nullptr) path = t;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    if (!path.empty()) fs::remove_all(path, ec);
-  }
-};
-
-// Runs Twin::Run on a thread of its own until Stop (or destruction).
-class TwinRunner {
- public:
-  explicit TwinRunner(Twin* twin)
-      : thread_([this, twin] { twin->Run([this] { return !stop_.load(); }); }) {}
-  ~TwinRunner() { Stop(); }
-  void Stop() {
-    stop_ = true;
-    if (thread_.joinable()) thread_.join();
-  }
-
- private:
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
+using testing::Clock;
+using testing::Since;
 
 struct Grabbed {
   double t_s = 0.0;
@@ -81,62 +42,22 @@ struct Grabbed {
 };
 
 TEST(TwinLatchTest, EveryFramesEncoderCountIsTheTwinsAtItsExposure) {
-  TempDir dir;
-  ASSERT_FALSE(dir.path.empty()) << "no temporary folder for the ports";
-  std::string error;
-  std::unique_ptr<drivers::GstStereoServer> server =
-      drivers::GstStereoServer::Open("127.0.0.1", 0, 0, 320, 240, &error);
-  ASSERT_TRUE(server) << error;
-  drivers::GstStereoServer* srv = server.get();
-  TwinOptions options;
-  options.dir = dir.path;
-  Twin twin(LoadScenario(ResolveDataPath("scenarios/default.yaml")), options,
-            [srv](int camera, const cv::Mat& bgr, std::uint64_t frame, double t) {
-              srv->Push(camera, bgr, frame, t);
-            });
-  TwinRunner runner(&twin);
-
-  // The real drivers on the twin's wires, opened as src/app/devices.cc opens them.
-  drivers::SerialConfig serial;
-  serial.port = dir.path + "/laser_board";
-  serial.baud = Baud("laser_board");
-  std::unique_ptr<drivers::SerialPort> port = drivers::SerialPort::Open(serial, &error);
-  ASSERT_TRUE(port) << serial.port << " at " << serial.baud << ": " << error;
-  auto board = std::make_shared<drivers::LaserBoard>(std::move(port));
-  drivers::BoardStripeLaser laser(board);
-  drivers::LatchSource latch = [board](std::optional<std::uint32_t> frame,
-                                       drivers::ExposureLatch* out) {
-    drivers::FrameLatch l;
-    const Status status = frame ? board->FrameLatchOf(*frame, &l) : board->LatestFrameLatch(&l);
-    out->frame = l.frame;
-    out->encoder_count = l.encoder_count;
-    out->laser_on = l.laser_on;
-    return status;
-  };
-  drivers::GstCameraConfig config;
-  config.left = server->ClientPipeline(0);
-  config.right = server->ClientPipeline(1);
-  config.latch_pairing = drivers::LatchPairing::kOffset;
-  std::unique_ptr<drivers::GstStereoCamera> camera =
-      drivers::GstStereoCamera::Open(config, latch, nullptr, &error);
-  ASSERT_TRUE(camera) << error;
+  testing::TwinRig rig(ResolveDataPath("scenarios/default.yaml"));
+  ASSERT_TRUE(rig.ok) << rig.error;
+  drivers::LaserBoard& board = *rig.board;
+  drivers::BoardStripeLaser& laser = *rig.laser;
+  drivers::GstStereoCamera* camera = rig.camera.get();
+  Twin& twin = *rig.twin;
 
   // Full speed, back and forth between the limits (the twin's board: -4500 ... 4500 counts).
-  const double top = board->options().max_speed_counts_s;
+  const double top = board.options().max_speed_counts_s;
   ASSERT_EQ(top, 9000.0);
   constexpr std::int32_t kLimit = 4500;
   ASSERT_EQ(laser.SetLaser(true), Status::kOk);
   std::int32_t target = kLimit;
   ASSERT_EQ(laser.MoveTo(target, top), Status::kOk);
 
-  // The first frames (the streams connecting) are not counted.
   device::StereoFrame frame;
-  const Clock::time_point start = Clock::now();
-  int warm = 0;
-  while (warm < 3 && Since(start) < 10.0) {
-    if (camera->Grab(&frame) == Status::kOk) ++warm;
-  }
-  ASSERT_EQ(warm, 3) << "no frames from the twin within 10 s: " << camera->last_error();
   const drivers::GstCameraStats stats0 = camera->stats();
 
   constexpr int kFrames = 150;
@@ -161,7 +82,7 @@ TEST(TwinLatchTest, EveryFramesEncoderCountIsTheTwinsAtItsExposure) {
   const drivers::GstCameraStats stats1 = camera->stats();
   laser.Stop();
   laser.SetLaser(false);
-  runner.Stop();
+  rig.StopTwin();
 
   const std::vector<TwinExposure>& exposures = twin.exposures();
   const TwinFrameCounts counts = twin.frame_counts();
