@@ -1,6 +1,6 @@
 #pragma once
 /// @file The twin behind the real wires on a thread, for the tests and benchmarks that talk to
-/// it through the real drivers: the default world in wall-clock time (sim::Twin::Run), its
+/// it through the real drivers: a scenario's world in wall-clock time (sim::Twin::Run), its
 /// cameras on a GstStereoServer, and the real LaserBoard, GstStereoCamera (latch_pairing
 /// offset, its latches from that board) and Val2Arm (arm_right) on its ports, opened as
 /// src/app/devices.cc opens them.
@@ -57,7 +57,7 @@ struct TwinRig {
   std::string error;
 
   explicit TwinRig(const std::string& scenario) {
-    std::string t = (fs::temp_directory_path() / "twin_bench_XXXXXX").string();
+    std::string t = (fs::temp_directory_path() / "twin_rig_XXXXXX").string();
     if (::mkdtemp(t.data()) == nullptr) {
       error = "no temporary folder";
       return;
