@@ -25,6 +25,7 @@ constexpr int kContradictions = 3;  // late samples in a row against known_: an 
 constexpr double kStillM_s = 0.001;  // estimated slower than this: the fingers are still
 constexpr double kContactN = 0.5;    // a grip force above this: the pads touch an object
 constexpr double kEndMarginM = 0.005;  // "at an end stop": this near it, beyond the uncertainty
+constexpr double kContactMemoryS = 0.2;  // an object the pads touched this recently is still there
 constexpr int kMaxReversals = 3;     // Open() gives up hunting after this many turns
 
 double Seconds(std::chrono::steady_clock::duration d) {
@@ -262,20 +263,31 @@ void SensorHandHand::HandleSample(const DumpSample& d, Clock::time_point now) {
     // the old one settled (under it the state stays in its set: idle stays idle, opening or
     // blocked stays so); else, and to call the command lost, only samples made after the
     // command must have reached the hand and the fingers settled count.
+    if (force > kContactN) pending_->contact = true;
     bool shows_new = Consistent(pending_->cmd, ev);
     bool shows_old = Consistent(pending_->before, ev);
-    if (shows_new && shows_old && ev == Evidence::kRunning && force <= kContactN) {
+    const bool late = LateEnough(pending_->t_written);
+    if (shows_new && shows_old && ev == Evidence::kRunning && force > kContactN) {
+      // Blocked pressing an object: only a close speed keeps the pads on it (an open one moves
+      // them off it, and they are blocked only at the open end stop, where nothing presses).
+      // Before the samples are late, the old setting's grip may still show.
+      shows_old = late && pending_->before.close != 0;
+      shows_new = late && pending_->cmd.close != 0;
+    } else if (shows_new && shows_old && ev == Evidence::kRunning) {
       // Blocked without a force: at an end stop, which a reversal's two settings put at
       // opposite ends. Where each would have the fingers tells them apart (an open speed lost
-      // at the end stop stays blocked there; the close would have left it long since).
+      // at the end stop stays blocked there; the close would have left it long since). A
+      // close speed meets an object the pads touched since shortly before the write: it
+      // would press it again rather than reach 0 (were the object gone meanwhile, neither
+      // setting shows and the command stays unresolved: safe).
       const double margin = kEndMarginM + prior.uncertainty_m();
       auto at_its_end = [&](const SpeedSetting& s, double y) {
-        return s.open != 0 ? y >= options_.max_opening_m - margin : y <= margin;
+        if (s.open != 0) return y >= options_.max_opening_m - margin;
+        return !pending_->contact && y <= margin;
       };
       shows_old = at_its_end(pending_->before, prior.opening_m());
       shows_new = at_its_end(pending_->cmd, Hypothesis(*pending_, t).opening_m());
     }
-    const bool late = LateEnough(pending_->t_written);
     // Idle (speeds 0) and blocked (a speed set) need no settling: each is impossible under the
     // other kind of setting.
     const bool definite = ev == Evidence::kStopped || ev == Evidence::kRunning;
@@ -432,6 +444,10 @@ void SensorHandHand::Step(Clock::time_point now, std::vector<std::uint8_t>* out)
   p.before = known_;
   p.at_write = estimator_;
   p.before_settled = known_shown_ && Consistent(known_, Classify(history_.back().d.state));
+  for (const Sample& h : history_) {
+    if (Seconds(now - h.t) <= kContactMemoryS && sensorhand::ForceN(h.d.f_bracket) > kContactN)
+      p.contact = true;
+  }
   p.goal_id = goal_.id;
   p.logged = command_log_.Sent({sensorhand::Command::Kind::kSpeed, want});
   pending_ = std::move(p);

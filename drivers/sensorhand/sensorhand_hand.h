@@ -215,6 +215,8 @@ class SensorHandHand final : public device::Hand {
     std::vector<Observation> since_write;   ///< samples since, to replay once it is resolved
     int votes_new = 0, votes_old = 0;       ///< samples that show either setting
     bool before_settled = false;  ///< the newest sample before it already showed `before`
+    /// The pads pressed an object (a grip force) since kContactMemoryS before the write.
+    bool contact = false;
     std::uint64_t goal_id = 0;
     CommandLog<sensorhand::Command>::Id logged = 0;  ///< its entry in command_log_
   };

@@ -36,27 +36,52 @@ double Since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// What a FilterLink drops.
+struct FilterPlan {
+  bool drop_echoes = false;      ///< every speed echo from the hand
+  int drop_every_nth_command = 0;  ///< every n-th speed command to the hand
+  int drop_close_number = 0;     ///< the n-th speed command that closes (1 = the first)
+  /// Everything the hand sends for this long after a closing speed command is written: a
+  /// dropout that hides how the fingers reacted. After the blind_close_number-th close (1 = the
+  /// first), or after each if 0.
+  double blind_after_close_s = 0.0;
+  int blind_close_number = 0;
+  std::optional<std::uint8_t> state_as;  ///< every stream frame's state byte replaced by this
+};
+
 // A link that lets a test drop what it chooses: speed echoes from the hand (re-framing the
-// hand's bytes through a ReplyDecoder), or speed commands to it.
+// hand's bytes through a ReplyDecoder), chosen speed commands to it, or all it sends for a while
+// after a command.
 class FilterLink final : public ByteLink {
  public:
-  FilterLink(std::unique_ptr<ByteLink> inner, bool drop_echoes, int drop_every_nth_command,
-             std::optional<std::uint8_t> state_as = std::nullopt)
-      : inner_(std::move(inner)),
-        drop_echoes_(drop_echoes || state_as),
-        nth_(drop_every_nth_command),
-        state_as_(state_as) {}
+  FilterLink(std::unique_ptr<ByteLink> inner, const FilterPlan& plan)
+      : inner_(std::move(inner)), plan_(plan) {
+    plan_.drop_echoes = plan.drop_echoes || plan.state_as;
+  }
   Status Write(std::span<const std::uint8_t> bytes) override {
     // The driver writes a speed command last in a write (after a stream start, if any).
-    if (nth_ > 0 && bytes.size() >= 5 && bytes[bytes.size() - 4] == sensorhand::kOpSpeed &&
-        ++speed_writes_ % nth_ == 0) {
+    if (bytes.size() < 5 || bytes[bytes.size() - 4] != sensorhand::kOpSpeed)
+      return inner_->Write(bytes);
+    const bool closes = bytes[bytes.size() - 2] != 0;
+    if (closes) {
+      ++close_writes_;
+      if (plan_.blind_after_close_s > 0.0 &&
+          (plan_.blind_close_number == 0 || plan_.blind_close_number == close_writes_)) {
+        blind_until_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double>(plan_.blind_after_close_s));
+      }
+    }
+    ++speed_writes_;
+    if ((plan_.drop_every_nth_command > 0 && speed_writes_ % plan_.drop_every_nth_command == 0) ||
+        (closes && close_writes_ == plan_.drop_close_number)) {
       ++dropped_commands_;  // lost on the line
       return bytes.size() > 5 ? inner_->Write(bytes.first(bytes.size() - 5)) : Status::kOk;
     }
     return inner_->Write(bytes);
   }
   Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
-    if (!drop_echoes_) return inner_->Read(buf, timeout_s, n);
+    if (!plan_.drop_echoes && plan_.blind_after_close_s <= 0.0)
+      return inner_->Read(buf, timeout_s, n);
     *n = 0;
     if (held_.empty()) {
       std::uint8_t raw[256];
@@ -65,12 +90,18 @@ class FilterLink final : public ByteLink {
       if (s != Status::kOk) return s;
       std::vector<sensorhand::Reply> replies;
       decoder_.Push(std::span<const std::uint8_t>(raw, got), &replies);
+      const bool blind = Clock::now() < blind_until_;
       for (auto r : replies) {
-        if (r.kind == sensorhand::Reply::Kind::kSpeedEcho && drop_echoes_) {
+        if (blind) {
+          ++blinded_replies_;
+          continue;
+        }
+        if (r.kind == sensorhand::Reply::Kind::kSpeedEcho && plan_.drop_echoes) {
           ++dropped_echoes_;
           continue;
         }
-        if (r.kind == sensorhand::Reply::Kind::kDump && state_as_) r.dump.state = *state_as_;
+        if (r.kind == sensorhand::Reply::Kind::kDump && plan_.state_as)
+          r.dump.state = *plan_.state_as;
         const auto b = sensorhand::Encode(r);
         held_.insert(held_.end(), b.begin(), b.end());
       }
@@ -84,13 +115,14 @@ class FilterLink final : public ByteLink {
   void Discard() override { inner_->Discard(); }
   int dropped_echoes() const { return dropped_echoes_; }
   int dropped_commands() const { return dropped_commands_; }
+  int blinded_replies() const { return blinded_replies_; }
 
  private:
   std::unique_ptr<ByteLink> inner_;
-  bool drop_echoes_;
-  int nth_;
-  std::optional<std::uint8_t> state_as_;  ///< every stream frame's state byte replaced by this
-  int speed_writes_ = 0, dropped_echoes_ = 0, dropped_commands_ = 0;
+  FilterPlan plan_;
+  int speed_writes_ = 0, close_writes_ = 0;
+  int dropped_echoes_ = 0, dropped_commands_ = 0, blinded_replies_ = 0;
+  Clock::time_point blind_until_{};
   sensorhand::ReplyDecoder decoder_;
   std::vector<std::uint8_t> held_;
 };
@@ -100,9 +132,7 @@ struct RigOptions {
   bool faulty = false;
   FaultPlan plan;
   std::string link_path;
-  bool drop_echoes = false;
-  int drop_every_nth_command = 0;
-  std::optional<std::uint8_t> state_as;  ///< a hand whose state values are not ours
+  FilterPlan filter;  ///< what a FilterLink drops (none if it drops nothing)
   SensorHandOptions hand;
   std::optional<SpeedSetting> running_at_start;  ///< the hand runs at this when the driver starts
 };
@@ -133,9 +163,10 @@ struct Rig {
     auto port = SerialPort::Open(SensorHandHand::SerialConfigFor(host->port()), &error);
     EXPECT_TRUE(port) << error;
     std::unique_ptr<ByteLink> link = std::move(port);
-    if (o.drop_echoes || o.drop_every_nth_command > 0 || o.state_as) {
-      auto f = std::make_unique<FilterLink>(std::move(link), o.drop_echoes,
-                                            o.drop_every_nth_command, o.state_as);
+    const FilterPlan& fp = o.filter;
+    if (fp.drop_echoes || fp.drop_every_nth_command > 0 || fp.drop_close_number > 0 ||
+        fp.blind_after_close_s > 0.0 || fp.state_as) {
+      auto f = std::make_unique<FilterLink>(std::move(link), fp);
       filter = f.get();
       link = std::move(f);
     }
@@ -392,7 +423,7 @@ TEST(SensorHandHand, StopsAHandFoundMoving) {
 // arrived (moving its way, blocked, idle), none twice; the loops still land.
 TEST(SensorHandHand, EchoesLostCommandsJudgedByTheStream) {
   RigOptions o = WithObject(0.05);
-  o.drop_echoes = true;
+  o.filter.drop_echoes = true;
   Rig rig(o);
   for (double target : {0.09, 0.06, 0.1}) {
     ASSERT_EQ(rig.hand->Open(target), Status::kOk) << target;
@@ -422,7 +453,7 @@ TEST(SensorHandHand, EchoesLostCommandsJudgedByTheStream) {
 // setting, so it is sent again, once; the hand executes each setting once.
 TEST(SensorHandHand, SwallowedCommandsAreSentAgainOnce) {
   RigOptions o = WithObject(0.05);
-  o.drop_every_nth_command = 3;
+  o.filter.drop_every_nth_command = 3;
   Rig rig(o);
   for (double target : {0.09, 0.06, 0.075, 0.03}) {
     Status st;
@@ -452,7 +483,7 @@ TEST(SensorHandHand, SwallowedCommandsAreSentAgainOnce) {
 // left the end stop long since, so it is lost, and sent again once.
 TEST(SensorHandHand, ReversalLostAtTheEndStopIsSentAgain) {
   RigOptions o = WithObject(0.05);
-  o.drop_every_nth_command = 2;  // the open passes, the close behind it is lost
+  o.filter.drop_every_nth_command = 2;  // the open passes, the close behind it is lost
   Rig rig(o);
   ASSERT_EQ(rig.hand->Home(), Status::kOk);  // opening full from 0.08 m
   Status st;
@@ -471,6 +502,75 @@ TEST(SensorHandHand, ReversalLostAtTheEndStopIsSentAgain) {
   EXPECT_GT(rig.Force(), 36.0);
   EXPECT_LE(rig.Force(), 40.2);
   EXPECT_LT(rig.EstimateError(), 2 * kGripErrorM);
+  rig.ExpectLogsAgree();
+}
+
+// Bug fix (CI, FaultInjection1000Commands): a reversal (close while opening) executed, its echo
+// lost and the stream down while the fingers ran back onto the object. They come back blocked on
+// it with a force, which "blocked" fits under either setting, so the close stayed unresolved after
+// 1 s. Only a close speed keeps the pads pressed on an object: it is judged executed.
+TEST(SensorHandHand, UnechoedReversalBlockedOnTheObjectIsJudgedByTheForce) {
+  RigOptions o = WithObject(0.05);
+  o.filter.drop_echoes = true;
+  // Unseen, the fingers reach the object, press it and stall (blocked) after some 0.55 s.
+  o.filter.blind_after_close_s = 0.7;
+  Rig rig(o);
+  ASSERT_EQ(rig.hand->Home(), Status::kOk);  // opening full from 0.08 m
+  Status st;
+  const auto t0 = Clock::now();
+  while ((st = rig.hand->Close(80.0)) != Status::kOk && Since(t0) < 3.0) {
+  }
+  ASSERT_EQ(st, Status::kOk);
+  ASSERT_TRUE(rig.hand->WaitIdle(4.0));
+  const SensorHandStats hs = rig.hand->stats();
+  std::printf("unechoed reversal, unseen: %d replies hidden; %llu executed (%llu by the stream), "
+              "%llu lost, %llu unresolved; %.1f N\n",
+              rig.filter->blinded_replies(), static_cast<unsigned long long>(hs.executed),
+              static_cast<unsigned long long>(hs.executed_unechoed),
+              static_cast<unsigned long long>(hs.lost),
+              static_cast<unsigned long long>(hs.unresolved), rig.Force());
+  EXPECT_GT(rig.filter->blinded_replies(), 40);  // 0.7 s of 12 ms frames
+  EXPECT_EQ(hs.unresolved, 0u);
+  EXPECT_EQ(hs.lost, 0u);
+  EXPECT_EQ(hs.executed, hs.commands);
+  EXPECT_GT(rig.Force(), 36.0);
+  rig.ExpectLogsAgree();
+}
+
+// Bug fix (CI, FaultInjection1000Commands): a reversal (close while the pads leave the object
+// they held) lost on the line, and the stream down until the fingers were blocked at the open end
+// stop. An estimate that ignores the object had the close at the closed end, blocked too, so
+// neither setting was told and the close stayed unresolved. A close would have met the object
+// again and pressed it: it is lost, and sent again once.
+TEST(SensorHandHand, ReversalLostWhileThePadsLeaveTheObjectIsSentAgain) {
+  RigOptions o = WithObject(0.05);
+  o.filter.drop_close_number = 2;  // the grip's close passes, the reversal's is lost
+  o.filter.blind_after_close_s = 0.3;
+  o.filter.blind_close_number = 2;
+  Rig rig(o);
+  ASSERT_EQ(rig.hand->Close(40.0), Status::kOk);
+  ASSERT_TRUE(rig.hand->WaitIdle(4.0));
+  ASSERT_GT(rig.Force(), 36.0);
+  ASSERT_EQ(rig.hand->Home(), Status::kOk);  // the pads leave the object at full speed
+  // Closing at full speed, the fingers would have met (0) in the dark, without the object.
+  Status st;
+  const auto t0 = Clock::now();
+  while ((st = rig.hand->Close(100.0)) != Status::kOk && Since(t0) < 3.0) {
+  }
+  ASSERT_EQ(st, Status::kOk);
+  ASSERT_TRUE(rig.hand->WaitIdle(4.0));
+  const SensorHandStats hs = rig.hand->stats();
+  std::printf("reversal lost leaving the object: %d replies hidden; %llu lost, %llu re-sent, "
+              "%llu unresolved; %.1f N\n",
+              rig.filter->blinded_replies(), static_cast<unsigned long long>(hs.lost),
+              static_cast<unsigned long long>(hs.resends),
+              static_cast<unsigned long long>(hs.unresolved), rig.Force());
+  EXPECT_EQ(rig.filter->dropped_commands(), 1);
+  EXPECT_GT(rig.filter->blinded_replies(), 15);
+  EXPECT_EQ(hs.lost, 1u);
+  EXPECT_EQ(hs.resends, 1u);
+  EXPECT_EQ(hs.unresolved, 0u);
+  EXPECT_GT(rig.Force(), 60.0);
   rig.ExpectLogsAgree();
 }
 
@@ -502,7 +602,7 @@ TEST(SensorHandHand, ClosingUnseenOntoAnObjectHomesFirst) {
 // After unresolved_s the driver says so (unresolved, estimate lost) and stops the fingers.
 TEST(SensorHandHand, UnjudgedCommandIsReportedAndTheFingersStopped) {
   RigOptions o;
-  o.state_as = 0x55;
+  o.filter.state_as = 0x55;
   Rig rig(o);
   // The first sample is not "idle": the driver sends a stop at once, which it cannot judge.
   const auto t0 = Clock::now();
