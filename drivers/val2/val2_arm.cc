@@ -166,6 +166,7 @@ Status Val2Arm::Read(device::ArmState* state) {
     }
   }
   state->moving = changed || motion_since_read_;
+  at_rest_ = have_prev_ && !state->moving;
   motion_since_read_ = false;
   have_prev_ = true;
   prev_t_ = t;
@@ -199,7 +200,10 @@ Status Val2Arm::MoveJoints(const device::Joint6& q_target) {
       return Status::kRejected;
     }
   }
-  return Command(val2::Encode(val2::MoveJointsCommand(deg)), false, true);
+  // Visible: some joint goes ten WHERE units beyond where the arm rests.
+  bool visible = false;
+  for (int k = 0; k < 6; ++k) visible |= std::abs(deg[k] - prev_deg_[k]) > 10.0 * opt_.still_deg;
+  return Command(val2::Encode(val2::MoveJointsCommand(deg)), false, true, visible);
 }
 
 Status Val2Arm::MoveRelative(const Pose3& X_EEnew) {
@@ -210,7 +214,11 @@ Status Val2Arm::MoveRelative(const Pose3& X_EEnew) {
     last_error_ = "relative move not representable: " + line;
     return Status::kRejected;
   }
-  return Command(line, false, true);
+  // Visible: 1 mm or 0.5 deg of the tool turns some joint by 0.1 deg (the Puma 260's reach is
+  // under 0.5 m), ten times still_deg.
+  const double turn = Eigen::AngleAxisd(X_EEnew.rotation()).angle();
+  const bool visible = X_EEnew.translation().norm() > 1e-3 || turn > DegToRad(0.5);
+  return Command(line, false, true, visible);
 }
 
 Status Val2Arm::SetSpeed(double fraction) {
@@ -250,7 +258,7 @@ Status Val2Arm::Ready() { return Command(val2::Encode(val2::ReadyCommand()), fal
 // ---------------------------------------------------------------------------------------------
 // Commands.
 
-Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion) {
+Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion, bool visible) {
   CallClock call = StartCall();
   Status s = DrainStale();
   if (s != Status::kOk) return Fail(s);
@@ -288,7 +296,8 @@ Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion) {
     pending_.reset();
   }
   LineOutcome out;
-  s = Drive(line, /*state_changing=*/true, resume, &call, &out);
+  const bool check_motion = is_motion && visible && at_rest_ && !motion_since_read_;
+  s = Drive(line, /*state_changing=*/true, resume, &call, &out, check_motion);
   if (s == Status::kOk) {
     Ran(line, /*inferred=*/!out.output_known);
     blind_typed_ = false;
@@ -302,7 +311,7 @@ Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion) {
 }
 
 Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
-                      LineOutcome* outcome) {
+                      LineOutcome* outcome, bool check_motion) {
   *outcome = LineOutcome{};
   bool armed = resume;    // the whole line may be in the controller's input, or have run
   bool verified = false;  // a ^R answer showed exactly the line
@@ -343,6 +352,23 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       if (!state_changing) {
         armed = false;  // WHERE: just ask again
         continue;
+      }
+      if (check_motion) {
+        // The whole answer lost: a silent run, a refusal's message or a cancel's echo look
+        // the same. The arm rested and the move is visible: WHERE tells.
+        bool moved = false;
+        const Status ms = MovedFromRest(Clock::now(), call, &moved);
+        if (ms != Status::kOk) {
+          pending_ = line;  // a retry resumes it, and checks again
+          return ms;
+        }
+        ++counters_.motion_checks;
+        if (!moved) {
+          ++counters_.unrun_found;
+          if (opt_.trace) opt_.trace("gone, but the arm still rests: not run, typed again");
+          armed = false;
+          continue;
+        }
       }
       outcome->executed = true;
       outcome->output_known = false;
@@ -455,6 +481,24 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       return Status::kBadReply;
     }
     // A partial or garbled line ran and was refused: type the command again.
+  }
+}
+
+Status Val2Arm::MovedFromRest(Clock::time_point since, CallClock* call, bool* moved) {
+  *moved = false;
+  for (;;) {
+    // The controller reads the joints when the WHERE runs, after it was asked.
+    const Clock::time_point asked = Clock::now();
+    val2::WhereReport report;
+    double t = 0.0;
+    const Status s = Where(call, &report, &t);
+    if (s != Status::kOk) return s;
+    for (int k = 0; k < 6; ++k) {
+      if (std::abs(report.joints[k] - prev_deg_[k]) > opt_.still_deg) *moved = true;
+    }
+    if (*moved || std::chrono::duration<double>(asked - since).count() >= opt_.motion_start_s) {
+      return Status::kOk;
+    }
   }
 }
 

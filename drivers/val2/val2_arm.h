@@ -65,6 +65,13 @@ struct Val2Options {
   /// as motion the arm of the twin never came to rest at the grasp. 0.01 deg is ten of WHERE's
   /// units and moves the gripper (0.45 m of arm) by under 0.1 mm.
   double still_deg = 0.01;
+  /// A motion command whose answer was lost whole (its line gone from the controller's input,
+  /// no trace of what ran) is checked by WHERE when the arm was at rest at the last Read and
+  /// the move is one WHERE can see: the arm moving means it ran; the joints still where they
+  /// rested this long (s) after the loss was found means it did not (refused, or its CR
+  /// damaged into a ^U), and it is typed again. A move starts within the controller's
+  /// trajectory cycle (28 ms); the first WHERE after a loss comes 0.1-0.3 s later.
+  double motion_start_s = 0.2;
   /// When set, told every exchange with the controller (bytes sent, answer, what the driver
   /// made of it), for debugging a link.
   std::function<void(const std::string&)> trace;
@@ -84,6 +91,8 @@ struct Val2Counters {
   long safety_aborts = 0;      ///< ABORTs sent after a lost link
   long blind_aborts = 0;       ///< ABORTs typed blind by SafeStop to a silent controller
   long bad_where = 0;          ///< WHERE reports that failed the strict parse
+  long motion_checks = 0;      ///< motion commands whose lost answer WHERE settled
+  long unrun_found = 0;        ///< of which had not run (typed again)
 };
 
 class Val2Arm final : public device::Arm {
@@ -150,14 +159,20 @@ class Val2Arm final : public device::Arm {
   };
 
   CallClock StartCall() const;
-  /// Runs one state-changing command line (the common path of the commands).
-  device::Status Command(const std::string& line, bool is_stop, bool is_motion);
+  /// Runs one state-changing command line (the common path of the commands). `visible`: a
+  /// motion that WHERE can see start (motion_start_s), so that a lost answer can be settled.
+  device::Status Command(const std::string& line, bool is_stop, bool is_motion,
+                         bool visible = false);
+  /// Whether the arm moves from where it rested at the last Read: WHERE until a joint has left
+  /// that rest by more than still_deg (*moved), or motion_start_s has passed since `since`.
+  device::Status MovedFromRest(Clock::time_point since, CallClock* call, bool* moved);
   /// One WHERE report, parsed.
   device::Status Where(CallClock* call, val2::WhereReport* report, double* t_s);
   /// Drives `line` until it has been executed once: types it, checks it, sends CR, resolves
   /// lost answers. `resume`: the line may already be complete in the controller (a retry).
+  /// `check_motion`: a lost answer is settled by MovedFromRest rather than taken as a run.
   device::Status Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
-                       LineOutcome* outcome);
+                       LineOutcome* outcome, bool check_motion = false);
   /// Empties the controller's line without executing `pending` if it is still there. Sets
   /// *executed when `pending` turns out to have been executed.
   device::Status Dispose(const std::string& pending, CallClock* call, bool* executed);
@@ -212,6 +227,9 @@ class Val2Arm final : public device::Arm {
   double prev_t_ = 0.0;
   std::array<double, 6> prev_deg_{};
   bool motion_since_read_ = false;
+  // The last Read found the joints unchanged since the one before, with no motion commanded
+  // in between: the arm rests at prev_deg_.
+  bool at_rest_ = false;
 
   std::string last_error_;
   Val2Counters counters_;

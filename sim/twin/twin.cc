@@ -338,10 +338,16 @@ json Twin::Report() const {
     const drivers::FaultCounts f = l->fault_counts();
     json log = json::array(), log_t = json::array();
     const drivers::DeviceEmulator& d = l->device();
+    json refused = json::array();
     if (const auto* v = dynamic_cast<const drivers::Val2Emulator*>(&d)) {
       for (const auto& e : v->executed()) {
         log.push_back(e.line);
         log_t.push_back(e.t_s);
+      }
+      // The lines VAL ran and refused (with its message): a driver that lost the message
+      // would have taken them as run.
+      for (const auto& [line, error] : v->refused()) {
+        refused.push_back({{"line", line}, {"error", error}});
       }
     } else if (const auto* h = dynamic_cast<const drivers::SensorHandEmulator*>(&d)) {
       for (const auto& e : h->log()) {
@@ -372,6 +378,7 @@ json Twin::Report() const {
                          {"inserted", f.inserted},
                          {"dropped", f.dropped},
                          {"dropouts", f.dropouts}}}};
+    if (!refused.empty()) lines[l->key()]["refused"] = std::move(refused);
     commands[l->key()] = std::move(log);
     times[l->key()] = std::move(log_t);
   }

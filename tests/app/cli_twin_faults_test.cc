@@ -179,6 +179,10 @@ TEST(CliTwinFaults, DISABLED_TheGraspSurvivesNoisyLinesAndEveryDeviceRanWhatItsD
         static_cast<unsigned long long>(f["dropouts"].get<std::uint64_t>()),
         device_logs[key].size(), driver.size() - static_cast<std::size_t>(unconfirmed),
         static_cast<std::size_t>(unconfirmed), ran);
+    for (const json& r : line.value("refused", json::array())) {
+      std::printf("%-11s refused: %s (%s)\n", key.c_str(), r.value("line", "").c_str(),
+                  r.value("error", "").c_str());
+    }
   }
   std::printf("run: ok %d, lifted %d, rise %.1f mm; run wall %.1f s, test wall %.1f s\n",
               static_cast<int>(report.value("ok", false)),

@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <functional>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include "emulators/val2_emulator.h"
@@ -164,13 +165,15 @@ TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
       "[ driver   ] %zu commands + %d reads; failed calls %d (timeout %d, disconnected %d, bad "
       "reply %d), at most %d calls for one command\n"
       "[ driver   ] typed %ld, echo mismatches %ld, probes %ld, cancels %ld, rubouts %ld, "
-      "retries resolved %ld, pending cancelled %ld, bad WHERE %ld, safety aborts %ld\n",
+      "retries resolved %ld, pending cancelled %ld, bad WHERE %ld, safety aborts %ld, lost "
+      "answers settled by WHERE %ld (%ld not run)\n",
       elapsed, static_cast<unsigned long long>(fc.bytes),
       static_cast<unsigned long long>(fc.corrupted), static_cast<unsigned long long>(fc.dropped),
       static_cast<unsigned long long>(fc.dropouts), expected.size(), reads, failures,
       failure_kinds[Status::kTimeout], failure_kinds[Status::kDisconnected],
       failure_kinds[Status::kBadReply], max_attempts, c.typed, c.echo_mismatches, c.probes,
-      c.cancels, c.rubouts, c.resolved_retries, c.cancelled_pending, c.bad_where, c.safety_aborts);
+      c.cancels, c.rubouts, c.resolved_retries, c.cancelled_pending, c.bad_where, c.safety_aborts,
+      c.motion_checks, c.unrun_found);
   EXPECT_GT(fc.corrupted, 100u);
   EXPECT_GT(fc.dropouts, 0u);
   // The controller executed exactly the commanded sequence.
@@ -237,14 +240,15 @@ TEST(Val2Faults, ConfirmedReadsAreRightUnderCorruption) {
 // Scripted losses around the CR.
 
 // A ByteLink that, once armed, loses everything in both directions for `lose_s` from the next CR
-// the driver writes (with or without that CR).
+// the driver writes (with or without that CR, or with the CR damaged into another byte).
 class CrLoser final : public ByteLink {
  public:
   explicit CrLoser(std::unique_ptr<ByteLink> inner) : inner_(std::move(inner)) {}
-  void Arm(bool lose_the_cr, double lose_s) {
+  void Arm(bool lose_the_cr, double lose_s, std::optional<std::uint8_t> cr_as = std::nullopt) {
     armed_ = true;
     lose_cr_ = lose_the_cr;
     lose_s_ = lose_s;
+    cr_as_ = cr_as;
   }
   Status Write(std::span<const std::uint8_t> bytes) override {
     if (armed_ && std::find(bytes.begin(), bytes.end(), '\r') != bytes.end()) {
@@ -252,6 +256,11 @@ class CrLoser final : public ByteLink {
       until_ = Clock::now() +
                std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(lose_s_));
       if (lose_cr_) return Status::kOk;
+      if (cr_as_) {
+        std::vector<std::uint8_t> damaged(bytes.begin(), bytes.end());
+        std::replace(damaged.begin(), damaged.end(), std::uint8_t{'\r'}, *cr_as_);
+        return inner_->Write(damaged);
+      }
       return inner_->Write(bytes);
     }
     if (Clock::now() < until_) return Status::kOk;
@@ -274,6 +283,7 @@ class CrLoser final : public ByteLink {
   std::unique_ptr<ByteLink> inner_;
   bool armed_ = false, lose_cr_ = false;
   double lose_s_ = 0.0;
+  std::optional<std::uint8_t> cr_as_;
   Clock::time_point until_{};
 };
 
@@ -337,6 +347,57 @@ TEST(Val2Faults, LostCrThenAnotherCommandCancelsIt) {
   EXPECT_EQ(rig.arm->MoveJoints(kB), Status::kOk);  // not the retry: A must not run now
   EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kB)});
   EXPECT_EQ(rig.arm->counters().cancelled_pending, 1);
+}
+
+// A lost answer shorter than a call (0.12 s of both directions from the CR): the line has left
+// the controller's input and nothing shows what ran. The arm rested at the last Read, so WHERE
+// settles it.
+void Rest(LossRig& rig) {
+  device::ArmState s;
+  for (int k = 0; k < 2; ++k) ASSERT_EQ(rig.arm->Read(&s), Status::kOk);  // two alike: at rest
+  ASSERT_FALSE(s.moving);
+}
+
+// The move ran: WHERE sees the arm leave its rest; it is not typed again.
+TEST(Val2Faults, LostAnswerOfAMoveIsSettledByTheMotion) {
+  LossRig rig;
+  Rest(rig);
+  rig.loser->Arm(/*lose_the_cr=*/false, 0.12);
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+  EXPECT_EQ(rig.arm->counters().motion_checks, 1);
+  EXPECT_EQ(rig.arm->counters().unrun_found, 0);
+}
+
+// Bug fix (a whole grasp through the twin's noisy wires): the controller refused the move and its
+// message was lost; the line gone and no trace, the driver took it as run and reported kOk, and
+// the servo counted on a move that never happened. The arm still rests: typed again, refused
+// again, visibly.
+TEST(Val2Faults, LostRefusalIsFoundByTheArmAtRest) {
+  LossRig rig;
+  Rest(rig);
+  rig.loser->Arm(false, 0.12);
+  const Joint6 out_of_range = Deg({170, -60, 30, 0, -45, 0});
+  EXPECT_EQ(rig.arm->MoveJoints(out_of_range), Status::kRejected);
+  EXPECT_EQ(rig.arm->last_error(), "Position out of range");
+  EXPECT_TRUE(Executed(rig.host).empty());
+  EXPECT_EQ(rig.host.With([](DeviceEmulator& d) {
+    return dynamic_cast<Val2Emulator&>(d).refused().size();
+  }), 2u);
+  EXPECT_EQ(rig.arm->counters().unrun_found, 1);
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);  // the arm still works
+}
+
+// Bug fix: the CR damaged into a ^U (0x0D ^ 0x18) cancels the line, and the cancel's echo is
+// lost: gone without a trace, it was taken as run. The arm still rests: typed again, and run
+// once.
+TEST(Val2Faults, CrDamagedIntoACancelWithItsEchoLostIsTypedAgain) {
+  LossRig rig;
+  Rest(rig);
+  rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+  EXPECT_EQ(rig.arm->counters().unrun_found, 1);
 }
 
 // ---------------------------------------------------------------------------------------------
