@@ -593,8 +593,9 @@ Status Val2Arm::Step(const std::string& bytes, const std::string& expected, doub
     known_ = false;
     return s;
   }
-  // The answers that are complete as they stand: the expected one, or, asking what an unknown
-  // line holds, the retype of each likely line.
+  // The answers that are complete as they stand: the expected one; a ^R's answer (the
+  // expected retype or, asking what an unknown line holds, that of each likely line) once the
+  // line is quiet.
   Expect want;
   if (!expected.empty()) want.exact.push_back(expected);
   if (bytes.size() == 1 && bytes[0] == val2::kCtrlR) {
@@ -709,7 +710,6 @@ Status Val2Arm::ReadAnswer(const Expect& want, double first_byte_timeout_s, Call
   answer->clear();
   std::uint8_t buf[512];
   double wait = first_byte_timeout_s;
-  static const std::string kRetypeHead = val2::RetypeEcho("");
   for (;;) {
     const double left = std::chrono::duration<double>(call->Deadline() - Clock::now()).count();
     const double t = std::max(0.0, std::min(wait, left));
@@ -727,21 +727,18 @@ Status Val2Arm::ReadAnswer(const Expect& want, double first_byte_timeout_s, Call
     call->last_heard = Clock::now();
     answer->append(reinterpret_cast<const char*>(buf), n);
     if (answer->size() > 4096) return Status::kOk;
-    // A retype has no end mark: it is complete at once only when it is the longest line it can
-    // be (a shorter likely line, say an empty one, may be followed by the rest of a longer).
-    std::size_t longest = 0;
-    for (const std::string& c : want.exact) longest = std::max(longest, c.size());
-    for (const std::string& c : want.exact) {
-      if (*answer == c && (!want.retype || c.size() == longest)) return Status::kOk;
+    // A retype has no end mark. It is complete only when the line goes quiet: an answer as
+    // long as the longest likely line may still go on, the line holding a character more (a CR
+    // damaged into one). Taken as complete there, the check before a CR passed, the CR ran the
+    // longer line, and the rest of the retype, read with the CR's answer, hid it: the twin's
+    // VAL II ran "...),00" for "...),0". At 9600 baud the next character follows within 1 ms.
+    if (!want.retype) {
+      for (const std::string& c : want.exact) {
+        if (*answer == c) return Status::kOk;
+      }
     }
     if (want.min_length > 0 && answer->size() >= want.min_length) return Status::kOk;
     if (val2::AnswerComplete(*answer, "")) return Status::kOk;  // an execution and its prompt
-    if (want.retype && answer->size() == longest &&
-        answer->compare(0, kRetypeHead.size(), kRetypeHead) == 0) {
-      // As long as the longest likely line: a damaged copy of it (were the line longer, the
-      // rest would spoil the next answer, and the line be asked again).
-      return Status::kOk;
-    }
     // A line being executed ("\r\n" echoed, nothing printed yet) may keep the controller busy
     // for a while; other answers are complete when the line goes quiet.
     const bool thinking = *answer == "\r\n";

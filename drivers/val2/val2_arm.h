@@ -190,7 +190,7 @@ class Val2Arm final : public device::Arm {
   struct Expect {
     std::vector<std::string> exact;  ///< answers complete as they stand
     std::size_t min_length = 0;      ///< > 0: complete at this length (a typed chunk's echo)
-    bool retype = false;             ///< a ^R: complete at the length of an `exact` retype
+    bool retype = false;             ///< a ^R: complete only when the line goes quiet
   };
   device::Status ReadAnswer(const Expect& want, double first_byte_timeout_s, CallClock* call,
                             std::string* answer);

@@ -400,6 +400,72 @@ TEST(Val2Faults, CrDamagedIntoACancelWithItsEchoLostIsTypedAgain) {
   EXPECT_EQ(rig.arm->counters().unrun_found, 1);
 }
 
+// A ByteLink that, once armed, sends the next character typed alone twice and loses the first
+// byte the controller answers with: the controller holds a character more than the driver saw
+// echoed. It hands the controller's bytes on one a read, as a 9600-baud line delivers them.
+class DoubledCharacter final : public ByteLink {
+ public:
+  explicit DoubledCharacter(std::unique_ptr<ByteLink> inner) : inner_(std::move(inner)) {}
+  void Arm() { armed_ = true; }
+  Status Write(std::span<const std::uint8_t> bytes) override {
+    if (armed_ && bytes.size() == 1 && bytes[0] >= 0x20 && bytes[0] < 0x7F) {
+      armed_ = false;
+      lose_next_ = true;
+      const std::uint8_t twice[] = {bytes[0], bytes[0]};
+      return inner_->Write(twice);
+    }
+    return inner_->Write(bytes);
+  }
+  Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+    *n = 0;
+    if (held_.empty()) {
+      std::uint8_t raw[512];
+      std::size_t got = 0;
+      const Status s = inner_->Read(raw, timeout_s, &got);
+      if (s != Status::kOk) return s;
+      held_.insert(held_.end(), raw, raw + got);
+      if (lose_next_ && !held_.empty()) {
+        lose_next_ = false;
+        held_.erase(held_.begin());
+      }
+      if (held_.empty()) return Status::kTimeout;
+    }
+    buf[0] = held_.front();
+    held_.erase(held_.begin());
+    *n = 1;
+    return Status::kOk;
+  }
+  void Discard() override {
+    held_.clear();
+    inner_->Discard();
+  }
+
+ private:
+  std::unique_ptr<ByteLink> inner_;
+  bool armed_ = false, lose_next_ = false;
+  std::vector<std::uint8_t> held_;
+};
+
+// Bug fix (the twin's noisy wires): the controller held the command and a character more, the
+// last one doubled ("...),00" for "...),0", which VAL reads as the same approach distance). The
+// check before the CR read the retype only as far as the command's length, so it passed; the CR
+// ran the longer line, and the rest of the retype, read with the CR's answer, hid it. The check
+// reads the retype until the line goes quiet: the extra character is rubbed out first.
+TEST(Val2Faults, ACharacterMoreOnTheLineIsRubbedOutBeforeTheCr) {
+  EmulatorHost host(MakeVal2Emulator());
+  auto link = std::make_unique<DoubledCharacter>(OpenPort(host.port()));
+  DoubledCharacter* doubled = link.get();
+  Val2Arm arm(std::move(link));
+  Pose3 delta = Pose3::Identity();
+  delta.translate(Eigen::Vector3d(0.002, -0.001, 0.003));
+  const std::string line = val2::Encode(val2::MoveRelativeCommand(val2::PoseToTrans(delta)));
+  ASSERT_EQ(line.back(), '0');  // "...),0": a doubled 0 still runs
+  doubled->Arm();  // the first character typed alone: the line's last
+  EXPECT_EQ(arm.MoveRelative(delta), Status::kOk);
+  EXPECT_EQ(Executed(host), std::vector<std::string>{line});
+  EXPECT_GE(arm.counters().rubouts, 1);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Cut link, lost link, vanished port.
 
