@@ -180,7 +180,11 @@ nlohmann::json LookReport(const sim::Scenario& scenario, const nlohmann::json* t
   const std::vector<model::ColourSummary>& colours = scene.colours;
   const std::optional<int>& target = r.target;
   const std::optional<grasp::GraspPlan>& grasp_plan = r.plan;
-  report["range"] = {{"points", scan.points}, {"rejected", scan.rejected}};
+  report["range"] = {{"points", scan.points},
+                     {"rejected", scan.rejected},
+                     {"gaps_rescanned", scan.gaps_rescanned},
+                     {"frames_rescanned", scan.frames_rescanned},
+                     {"gaps_left", scan.gaps_left}};
   nlohmann::json jboxes = nlohmann::json::array();
   for (const model::BoxModel& b : boxes) {
     const model::ColourSummary& colour = colours[jboxes.size()];
@@ -254,6 +258,11 @@ nlohmann::json LookReport(const sim::Scenario& scenario, const nlohmann::json* t
       scan.points, scene.segments.regions.size(), scene.groups.objects.size(), boxes.size(),
       scene.unfitted, target ? std::to_string(*target) : "none", r.stages[0].wall_s,
       1e3 * (scene.segment_s + scene.model_s));
+  if (scan.gaps_rescanned > 0) {
+    spdlog::info("scan: the sweep missed {} stretches of stripe positions; {} frames swept "
+                 "again, {} gaps left",
+                 scan.gaps_rescanned, scan.frames_rescanned, scan.gaps_left);
+  }
   if (grasp_plan) {
     spdlog::info("plan: {} arm, opening {:.0f} mm, tilt {:.0f} deg, wrist-forearm {:.1f} deg",
                  grasp_plan->side == device::Side::kLeft ? "left" : "right",

@@ -187,7 +187,11 @@ int Scan(const ScanOptions& o) {
                                std::to_string(result.range.cols()) +
                                " frames of the sweep (is the laser on, and in the cameras' view?)";
   }
-  report["range"] = {{"points", result.points}, {"rejected", result.rejected}};
+  report["range"] = {{"points", result.points},
+                     {"rejected", result.rejected},
+                     {"gaps_rescanned", result.gaps_rescanned},
+                     {"frames_rescanned", result.frames_rescanned},
+                     {"gaps_left", result.gaps_left}};
   report["timing_s"] = {{"scan", scan_s}, {"total", Seconds(t0)}};
   report["safe_stop"] = safe.Json();
   std::string truth_line;
@@ -233,6 +237,11 @@ int Scan(const ScanOptions& o) {
   out.Commit();
   spdlog::info("scan: {} points, {} rejected rows{}; scan {:.2f} s, total {:.2f} s; wrote {}",
                result.points, result.rejected, truth_line, scan_s, Seconds(t0), o.out_dir);
+  if (result.gaps_rescanned > 0) {
+    spdlog::info("scan: the sweep missed {} stretches of stripe positions; {} frames swept "
+                 "again, {} gaps left",
+                 result.gaps_rescanned, result.frames_rescanned, result.gaps_left);
+  }
   if (!seen) {
     spdlog::error("scan: no_stripe: {}", report["failure_detail"].get<std::string>());
     return 1;

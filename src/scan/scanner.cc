@@ -228,6 +228,51 @@ ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
   const device::Status swept = Sweep(
       dev, sweep, [&](const device::StereoFrame& f) { frames.push_back(f); }, &failed_device);
   if (swept != device::Status::kOk) return failed(failed_device, swept);
+  // Stripe positions the host missed are swept again, at the sweep's speed and in its
+  // direction, and their frames put in their place: the columns stay in count order.
+  const std::int32_t dir = sweep.end_count < sweep.start_count ? -1 : 1;
+  const double step = std::abs(sweep.end_count - sweep.start_count) /
+                      static_cast<double>(sweep.positions);
+  const auto in_order = [dir](const device::StereoFrame& a, const device::StereoFrame& b) {
+    return dir * a.laser_encoder_count < dir * b.laser_encoder_count;
+  };
+  const auto gaps = [&] {
+    std::vector<std::pair<std::int32_t, std::int32_t>> g;
+    for (std::size_t i = 1; i < frames.size(); ++i) {
+      const std::int32_t a = frames[i - 1].laser_encoder_count;
+      const std::int32_t b = frames[i].laser_encoder_count;
+      if (dir * (b - a) > kGapSteps * step) g.emplace_back(a, b);
+    }
+    return g;
+  };
+  std::stable_sort(frames.begin(), frames.end(), in_order);
+  for (int pass = 0; pass < kMaxRescanPasses; ++pass) {
+    const auto missing = gaps();
+    if (missing.empty()) break;
+    for (const auto& [a, b] : missing) {
+      SweepConfig again;
+      again.start_count = a;
+      again.end_count = b;
+      again.positions = std::max(2, static_cast<int>(std::lround(std::abs(b - a) / step)));
+      again.stop = sweep.stop;
+      int added = 0;
+      const device::Status st = Sweep(
+          dev, again,
+          [&](const device::StereoFrame& f) {
+            // Only the frames inside the gap: the slew's end and the stop repeat its edges.
+            if (dir * (f.laser_encoder_count - a) > 0 && dir * (b - f.laser_encoder_count) > 0) {
+              frames.push_back(f);
+              ++added;
+            }
+          },
+          &failed_device);
+      if (st != device::Status::kOk) return failed(failed_device, st);
+      ++out.gaps_rescanned;
+      out.frames_rescanned += added;
+    }
+    std::stable_sort(frames.begin(), frames.end(), in_order);
+  }
+  out.gaps_left = static_cast<int>(gaps().size());
   if (const auto st = dev.laser->SetLaser(false); st != device::Status::kOk) {
     return failed("laser", st);
   }

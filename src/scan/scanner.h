@@ -48,6 +48,14 @@ struct ScanResult {
   RangeImage range{0, 0};
   int points = 0;
   int rejected = 0;
+  /// Stripe positions the sweep missed (frames the host never saw: it was held up, say by a
+  /// serial dropout, and the cameras showed only their newest frame) and that were swept again,
+  /// and the frames that pass added. A gap is a step between two frames' counts over
+  /// kGapSteps sweep steps.
+  int gaps_rescanned = 0;
+  int frames_rescanned = 0;
+  /// Gaps still there after the rescans (kMaxRescanPasses passes).
+  int gaps_left = 0;
   cv::Mat ambient_left;  ///< the left image with the laser off: the colour source
   /// kOk, or the device status that ended the scan early (the range is then empty and the laser
   /// has been told to go off); `failed_device` names the device that said it ("laser",
@@ -69,6 +77,11 @@ device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
 /// Checks that the intrinsics describe cameras of the frames' size.
 /// @throws hgrasp::InputError naming the intrinsics file (cameras.path), the sizes of both.
 void CheckFrameSize(const robot::StereoIntrinsics& cameras, const device::StereoFrame& frame);
+
+/// A step between two neighbouring frames' encoder counts over this many sweep steps is a gap.
+inline constexpr double kGapSteps = 2.5;
+/// Passes of rescanning the gaps a sweep left.
+inline constexpr int kMaxRescanPasses = 2;
 
 class Scanner {
  public:
