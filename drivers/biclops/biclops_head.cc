@@ -136,6 +136,8 @@ BiclopsHead::BiclopsHead(std::unique_ptr<ByteLink> link, const BiclopsOptions& o
   Require(options_.max_resends >= 0, "max_resends", options_.max_resends, "0 or more");
   Require(options_.settle_margin_s >= 0.0, "settle_margin_s", options_.settle_margin_s,
           "0 s or more");
+  Require(options_.stop_settle_s > 0.0, "stop_settle_s", options_.stop_settle_s,
+          "a positive time (s)");
   created_ = call_start_ = last_rx_ = Clock::now();
 }
 
@@ -1035,6 +1037,27 @@ Status BiclopsHead::Stop() {
     at_rest_[Index(a)] = false;
     rest_known_[Index(a)] = false;
     if (s != Status::kOk) return Fail(s);
+  }
+  // Stopped means at rest: the stop is executed at once, but the servo brakes each axis from
+  // its speed (a homing sweep, a move). The safe stop's report must not say "ok" for a head
+  // still turning.
+  const Clock::time_point give_up =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                         std::chrono::duration<double>(options_.stop_settle_s));
+  for (int a = 0; a < 3; ++a) {
+    for (;;) {
+      pmd::Reply reply;
+      const Status s = Query(a, pmd::op::kGetActivityStatus, 1, &reply);
+      if (s != Status::kOk) return Fail(s);
+      if ((reply.words[0] & pmd::activity::kInMotion) == 0) break;
+      if (Clock::now() > give_up) {
+        last_error_ = std::string("biclops ") + kAxisNames[a] + ": still moving " +
+                      std::to_string(options_.stop_settle_s) + " s after the stop";
+        return Status::kTimeout;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      BeginCall();  // braking is not silence: the chip answers every poll
+    }
   }
   return Status::kOk;
 }

@@ -98,6 +98,9 @@ struct BiclopsOptions {
   /// Margin on the longest move when waiting for a profile to end (after an unclear Update),
   /// and on each homing sweep's expected duration before it is called a timeout.
   double settle_margin_s = 1.0;
+  /// Stop waits up to this for every axis to report itself at rest: an abrupt stop zeroes the
+  /// profile, and the servo still brakes the axis from its speed. Still moving after it: kTimeout.
+  double stop_settle_s = 0.5;
   /// Whether the composition root homes the head (ConfigureAndHome) when it opens the driver:
   /// a freshly powered head must be homed; one homed since its power came on need not be.
   bool home_at_start = true;

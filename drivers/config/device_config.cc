@@ -171,6 +171,8 @@ const std::vector<Field<BiclopsOptions>>& BiclopsFields() {
       {"max_resends", &O::max_resends, 0, 1000, false, "re-sends of one command"},
       {"settle_margin_s", &O::settle_margin_s, 0.0, kMaxWait, false,
        "the margin on a profile's end (s)"},
+      {"stop_settle_s", &O::stop_settle_s, kMinWait, kMaxWait, true,
+       "the longest wait for the axes at rest after a stop (s)"},
       {"home_at_start", &O::home_at_start, 0, 0, false,
        "whether the head is homed when the driver is opened"},
   };

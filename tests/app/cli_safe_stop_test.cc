@@ -257,7 +257,7 @@ TEST(CliSafeStop, SigtermDuringTheHeadsHomingLeavesEveryDeviceSafe) {
   const double t_board = emu.board.Now();
   hgrasp.Signal(SIGTERM);
   EXPECT_EQ(hgrasp.Wait(10), 1) << ReadFile(dir / "log");
-  EXPECT_FALSE(chip_moving()) << "the head was not stopped";
+  EXPECT_FALSE(chip_moving()) << "the head was not stopped\n" << ReadFile(dir / "log");
   EXPECT_TRUE(emu.BoardSafe(t_board)) << ReadFile(dir / "log");
   EXPECT_TRUE(emu.Aborted(emu.arm_left, 0.0));
   EXPECT_TRUE(emu.Aborted(emu.arm_right, 0.0));

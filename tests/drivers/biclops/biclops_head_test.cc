@@ -428,6 +428,11 @@ TEST(BiclopsHead, StopHaltsEveryAxisWhereItIsAndTheNextMoveGoesOn) {
   ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
   std::this_thread::sleep_for(std::chrono::milliseconds(400));
   ASSERT_EQ(head.Stop(), Status::kOk);
+  // Stopped means at rest when Stop returns: the safe stop's report says so, and the process
+  // may exit right after it. (Before: kOk while the servo still braked the axis.)
+  EXPECT_FALSE(host.With([](DeviceEmulator& d) {
+    return dynamic_cast<BiclopsEmulator&>(d).chip().moving(0);
+  }));
   device::HeadState s = WaitStill(head, 2.0);
   EXPECT_FALSE(s.moving);
   EXPECT_GT(s.q.pan, 0.1);
