@@ -273,11 +273,16 @@ Status BiclopsHead::Resync() {
     for (std::size_t k = 0; k < pmd::kMaxCommandBytes && !answered; ++k) {
       s = link_->Write(std::span<const std::uint8_t>(&zero, 1));
       if (s != Status::kOk) return s;
+      const Clock::time_point sent = Clock::now();
       std::uint8_t buf[16];
       std::size_t n = 0;
       s = ReadLink(buf, wait, &n);
       if (s == Status::kDisconnected) return s;
-      if (s == Status::kOk) answered = true;
+      if (s == Status::kOk) {
+        answered = true;
+        const double rtt = Seconds(Clock::now() - sent);
+        zero_rtt_s_ = zero_rtt_s_ > 0.0 ? 0.9 * zero_rtt_s_ + 0.1 * rtt : rtt;
+      }
       if (silent_) return Status::kTimeout;
     }
     if (!answered) continue;
@@ -300,8 +305,18 @@ Status BiclopsHead::Resync() {
 
 double BiclopsHead::ZeroWait() const {
   // Four round trips of the link, at least 3 ms, at most the configured wait: a pty answers in
-  // a fraction of a millisecond, a 9600-baud line behind a USB adapter in 5-20 ms.
-  return std::clamp(4.0 * rtt_s_, 0.003, options_.resync_byte_timeout_s);
+  // a fraction of a millisecond, a 9600-baud line behind a USB adapter in 5-20 ms. Once a zero's
+  // own answer has been timed, three of those: a packet's round trip carries its bytes (10 ms
+  // of a GetVersion at 9600 baud), a zero's only two, and four packet round trips (clamped to
+  // 20 ms) made a round of ten zeros last 0.21 s. A 200 ms dropout that ended late in a round
+  // then left the chip silent for 0.37 s (reply wait, drain, a round unanswered, drain, one
+  // zero), within a few ms of the 0.4 s silence that reports a cut cable. Never less than one
+  // packet's round trip, which is longer than a zero's: a late answer to an earlier zero, timed
+  // as this one's, must not make the wait too short (a zero sent before the answer came stays
+  // pending and misframes the check).
+  const double per_zero =
+      zero_rtt_s_ > 0.0 ? std::max(3.0 * zero_rtt_s_, rtt_s_) : 4.0 * rtt_s_;
+  return std::clamp(per_zero, 0.003, options_.resync_byte_timeout_s);
 }
 
 Status BiclopsHead::SyncIfNeeded() {

@@ -276,6 +276,7 @@ class BiclopsHead final : public device::Head {
   std::array<std::uint32_t, 3> accel_reg_{};
   double longest_move_s_ = 0.0;
   double rtt_s_ = 0.0;  ///< mean time from a packet to its complete reply
+  double zero_rtt_s_ = 0.0;  ///< mean time from a resync zero to the first byte of its answer
   BiclopsCounters counters_;
   bool homed_ = false;
   const StopRequest* stop_ = nullptr;  ///< during ConfigureAndHome
