@@ -124,6 +124,13 @@ const std::vector<Field<Val2Options>>& Val2Fields() {
        "joint speed limits (deg/s)"},
       {"still_deg", &O::still_deg, 0, 10, true,
        "the joint change between reads that counts as motion (deg)"},
+      {"motion_start_s", &O::motion_start_s, kMinWait, kMaxWait, true,
+       "the time a move's check waits for it to start (s)"},
+      {"moved_deg", &O::moved_deg, 0, 10, true,
+       "the joints' progress that shows a move ran (deg)"},
+      {"moved_mm", &O::moved_mm, 0, 100, true, "the tool's progress that shows a move ran (mm)"},
+      {"moved_turn_deg", &O::moved_turn_deg, 0, 10, true,
+       "the tool's turn that shows a move ran (deg)"},
   };
   return t;
 }

@@ -90,6 +90,8 @@ class Val2Emulator final : public DeviceEmulator {
   Val2ArmModel& model() { return *model_; }
   const Val2ArmModel& model() const { return *model_; }
   const robot::ArmKinematics& kinematics() const { return kinematics_; }
+  /// VAL's world frame (the arm's base) in W.
+  const Pose3& X_WB() const { return X_WB_; }
   /// VAL's READY position (deg).
   static constexpr std::array<double, 6> kReadyDeg = {0.0, -90.0, 90.0, 0.0, 0.0, 0.0};
 

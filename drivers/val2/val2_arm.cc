@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 namespace hgrasp::drivers {
@@ -72,7 +73,9 @@ std::string FirstError(const std::string& output) {
 // arrives intact one time in ten, its last line (62) one time in two, and each report takes
 // 0.27 s at 9600 baud; with the whole report required, one Read in seven found none intact
 // within max_call_s.
-bool ParseWhereOutput(const std::string& output, val2::WhereReport* report) {
+// The joints (the last line); and the location, when a line before them reads as one
+// (*located: the location's line came through intact).
+bool ParseWhereOutput(const std::string& output, val2::WhereReport* report, bool* located) {
   val2::OutputDecoder dec;
   dec.Feed(output);
   std::vector<std::string> lines;
@@ -81,7 +84,12 @@ bool ParseWhereOutput(const std::string& output, val2::WhereReport* report) {
     if (u.kind != val2::OutputUnit::Kind::kLine || lines.size() == 4) return false;
     lines.push_back(u.text);
   }
-  return !lines.empty() && val2::ParseWhereJoints(lines.back(), &report->joints);
+  if (lines.empty() || !val2::ParseWhereJoints(lines.back(), &report->joints)) return false;
+  *located = false;
+  for (std::size_t k = 0; k + 1 < lines.size() && !*located; ++k) {
+    *located = val2::ParseWhereLocation(lines[k], &report->location);
+  }
+  return true;
 }
 
 }  // namespace
@@ -132,13 +140,15 @@ Status Val2Arm::Read(device::ArmState* state) {
   }
   val2::WhereReport report;
   double t = 0.0;
-  s = Where(&call, &report, &t);
+  bool located = false;
+  s = Where(&call, &report, &t, &located);
   if (s == Status::kOk && opt_.confirm_reads) {
     // A second report must agree with the first within the motion possible between them.
     for (;;) {
       val2::WhereReport second;
       double t2 = 0.0;
-      s = Where(&call, &second, &t2);
+      bool located2 = false;
+      s = Where(&call, &second, &t2, &located2);
       if (s != Status::kOk) break;
       bool agree = true;
       for (int k = 0; k < 6; ++k) {
@@ -147,6 +157,7 @@ Status Val2Arm::Read(device::ArmState* state) {
       }
       report = second;
       t = t2;
+      located = located2;
       if (agree) break;
       ++counters_.bad_where;
     }
@@ -171,19 +182,27 @@ Status Val2Arm::Read(device::ArmState* state) {
   have_prev_ = true;
   prev_t_ = t;
   prev_deg_ = report.joints;
+  if (located) {
+    prev_location_ = report.location;
+    located_ = true;
+  } else if (state->moving) {
+    located_ = false;  // (at rest, the location read earlier at this rest still holds)
+  }
   needs_read_ = false;
   blind_typed_ = false;
   ++counters_.reads;
   return Status::kOk;
 }
 
-Status Val2Arm::Where(CallClock* call, val2::WhereReport* report, double* t_s) {
+Status Val2Arm::Where(CallClock* call, val2::WhereReport* report, double* t_s, bool* located) {
+  bool ignored = false;
+  if (located == nullptr) located = &ignored;
   const std::string line = val2::Encode(val2::WhereCommand());
   for (;;) {
     LineOutcome out;
     const Status s = Drive(line, /*state_changing=*/false, /*resume=*/false, call, &out);
     if (s != Status::kOk) return s;
-    if (out.output_known && ParseWhereOutput(out.output, report)) {
+    if (out.output_known && ParseWhereOutput(out.output, report, located)) {
       *t_s = Now();
       return Status::kOk;
     }
@@ -200,10 +219,9 @@ Status Val2Arm::MoveJoints(const device::Joint6& q_target) {
       return Status::kRejected;
     }
   }
-  // Visible: some joint goes ten WHERE units beyond where the arm rests.
-  bool visible = false;
-  for (int k = 0; k < 6; ++k) visible |= std::abs(deg[k] - prev_deg_[k]) > 10.0 * opt_.still_deg;
-  return Command(val2::Encode(val2::MoveJointsCommand(deg)), false, true, visible);
+  Motion motion;
+  motion.joints_deg = deg;
+  return Command(val2::Encode(val2::MoveJointsCommand(deg)), false, true, &motion);
 }
 
 Status Val2Arm::MoveRelative(const Pose3& X_EEnew) {
@@ -214,11 +232,57 @@ Status Val2Arm::MoveRelative(const Pose3& X_EEnew) {
     last_error_ = "relative move not representable: " + line;
     return Status::kRejected;
   }
-  // Visible: 1 mm or 0.5 deg of the tool turns some joint by 0.1 deg (the Puma 260's reach is
-  // under 0.5 m), ten times still_deg.
-  const double turn = Eigen::AngleAxisd(X_EEnew.rotation()).angle();
-  const bool visible = X_EEnew.translation().norm() > 1e-3 || turn > DegToRad(0.5);
-  return Command(line, false, true, visible);
+  Motion motion;
+  motion.X_EEnew = X_EEnew;
+  return Command(line, false, true, &motion);
+}
+
+bool Val2Arm::Checkable(const Motion& motion) const {
+  if (motion.joints_deg) {
+    double length = 0.0;
+    for (int k = 0; k < 6; ++k) length += std::pow((*motion.joints_deg)[k] - prev_deg_[k], 2);
+    return std::sqrt(length) >= 2.0 * opt_.moved_deg;
+  }
+  return 1e3 * motion.X_EEnew.translation().norm() >= 2.0 * opt_.moved_mm ||
+         RadToDeg(Eigen::AngleAxisd(motion.X_EEnew.rotation()).angle()) >=
+             2.0 * opt_.moved_turn_deg;
+}
+
+double Val2Arm::Progress(const Motion& motion, const val2::WhereReport& report,
+                         bool located) const {
+  if (motion.joints_deg) {
+    // Along the move in joint space: the projection of the joints' travel from the rest on the
+    // unit vector towards the target.
+    double along = 0.0, length = 0.0;
+    for (int k = 0; k < 6; ++k) {
+      const double d = (*motion.joints_deg)[k] - prev_deg_[k];
+      along += (report.joints[k] - prev_deg_[k]) * d;
+      length += d * d;
+    }
+    length = std::sqrt(length);
+    return length > 0.0 ? along / length / opt_.moved_deg : 0.0;
+  }
+  if (!located_) {
+    // The tool's rest not known (no location line came through intact at this rest): the
+    // joints' travel from the rest, in any direction.
+    double travel = 0.0;
+    for (int k = 0; k < 6; ++k) travel += std::pow(report.joints[k] - prev_deg_[k], 2);
+    return std::sqrt(travel) / opt_.moved_deg;
+  }
+  if (!located) return std::numeric_limits<double>::quiet_NaN();  // this report tells nothing
+  // The tool: its move X_EEnew is in its own frame at the rest, E0.
+  const Pose3 X_BE0 = val2::TransToPose(prev_location_);
+  const Pose3 X_BE = val2::TransToPose(report.location);
+  const Eigen::Vector3d step_mm = 1e3 * motion.X_EEnew.translation();
+  if (step_mm.norm() >= 2.0 * opt_.moved_mm) {
+    const Eigen::Vector3d travel_mm = 1e3 * X_BE0.linear().transpose() *
+                                      (X_BE.translation() - X_BE0.translation());
+    return travel_mm.dot(step_mm.normalized()) / opt_.moved_mm;
+  }
+  const Eigen::AngleAxisd want(motion.X_EEnew.rotation());
+  const Eigen::AngleAxisd turned(X_BE0.linear().transpose() * X_BE.linear());
+  if (want.angle() <= 0.0) return 0.0;
+  return RadToDeg(turned.angle() * turned.axis().dot(want.axis())) / opt_.moved_turn_deg;
 }
 
 Status Val2Arm::SetSpeed(double fraction) {
@@ -258,7 +322,8 @@ Status Val2Arm::Ready() { return Command(val2::Encode(val2::ReadyCommand()), fal
 // ---------------------------------------------------------------------------------------------
 // Commands.
 
-Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion, bool visible) {
+Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion,
+                        const Motion* motion) {
   CallClock call = StartCall();
   Status s = DrainStale();
   if (s != Status::kOk) return Fail(s);
@@ -296,8 +361,9 @@ Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion, b
     pending_.reset();
   }
   LineOutcome out;
-  const bool check_motion = is_motion && visible && at_rest_ && !motion_since_read_;
-  s = Drive(line, /*state_changing=*/true, resume, &call, &out, check_motion);
+  // Settled by the arm when its answer is lost whole: a move WHERE sees, from a rest.
+  const bool check = motion && is_motion && at_rest_ && !motion_since_read_ && Checkable(*motion);
+  s = Drive(line, /*state_changing=*/true, resume, &call, &out, check ? motion : nullptr);
   if (s == Status::kOk) {
     Ran(line, /*inferred=*/!out.output_known);
     blind_typed_ = false;
@@ -311,7 +377,7 @@ Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion, b
 }
 
 Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
-                      LineOutcome* outcome, bool check_motion) {
+                      LineOutcome* outcome, const Motion* check_motion) {
   *outcome = LineOutcome{};
   bool armed = resume;    // the whole line may be in the controller's input, or have run
   bool verified = false;  // a ^R answer showed exactly the line
@@ -357,7 +423,7 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
         // The whole answer lost: a silent run, a refusal's message or a cancel's echo look
         // the same. The arm rested and the move is visible: WHERE tells.
         bool moved = false;
-        const Status ms = MovedFromRest(Clock::now(), call, &moved);
+        const Status ms = MovedFromRest(Clock::now(), *check_motion, call, &moved);
         if (ms != Status::kOk) {
           pending_ = line;  // a retry resumes it, and checks again
           return ms;
@@ -484,19 +550,34 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
   }
 }
 
-Status Val2Arm::MovedFromRest(Clock::time_point since, CallClock* call, bool* moved) {
+Status Val2Arm::MovedFromRest(Clock::time_point since, const Motion& motion, CallClock* call,
+                              bool* moved) {
   *moved = false;
+  int on_way = 0, short_of = 0;  // reports in a row
   for (;;) {
     // The controller reads the joints when the WHERE runs, after it was asked.
     const Clock::time_point asked = Clock::now();
     val2::WhereReport report;
     double t = 0.0;
-    const Status s = Where(call, &report, &t);
+    bool located = false;
+    const Status s = Where(call, &report, &t, &located);
     if (s != Status::kOk) return s;
-    for (int k = 0; k < 6; ++k) {
-      if (std::abs(report.joints[k] - prev_deg_[k]) > opt_.still_deg) *moved = true;
+    const double progress = Progress(motion, report, located);
+    if (opt_.trace) opt_.trace("motion check: progress " + std::to_string(progress));
+    if (std::isnan(progress)) continue;  // a report that tells nothing: in a row, not counted
+    if (progress >= 1.0) {
+      ++on_way;
+      short_of = 0;
+    } else {
+      ++short_of;
+      on_way = 0;
     }
-    if (*moved || std::chrono::duration<double>(asked - since).count() >= opt_.motion_start_s) {
+    if (on_way >= 2) {
+      *moved = true;
+      return Status::kOk;
+    }
+    if (short_of >= 2 &&
+        std::chrono::duration<double>(asked - since).count() >= opt_.motion_start_s) {
       return Status::kOk;
     }
   }

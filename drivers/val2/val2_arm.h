@@ -72,6 +72,18 @@ struct Val2Options {
   /// damaged into a ^U), and it is typed again. A move starts within the controller's
   /// trajectory cycle (28 ms); the first WHERE after a loss comes 0.1-0.3 s later.
   double motion_start_s = 0.2;
+  /// How far the arm must be on its way from that rest towards the commanded target, in two
+  /// WHERE reports in a row, for the check to find that the move ran: along the move in joint
+  /// space (deg) for a joint move; for a tool move, along the tool's path (mm), or about its turn
+  /// (deg) when it turns without going 2 moved_mm. The check finds that it did not run when
+  /// two reports in a row, the second asked motion_start_s or more after the loss was found, show
+  /// it short of that. Below these, two kinds of noise: a digit corrupted into another digit (one
+  /// report; VAL has no checksum, a report is off a degree), and an arm settling under a load
+  /// (a hand pressing on a box) that creeps under still_deg between two reads. A move is
+  /// checked (visible) when it goes twice as far.
+  double moved_deg = 0.05;
+  double moved_mm = 0.5;
+  double moved_turn_deg = 0.25;
   /// When set, told every exchange with the controller (bytes sent, answer, what the driver
   /// made of it), for debugging a link.
   std::function<void(const std::string&)> trace;
@@ -159,20 +171,40 @@ class Val2Arm final : public device::Arm {
   };
 
   CallClock StartCall() const;
-  /// Runs one state-changing command line (the common path of the commands). `visible`: a
-  /// motion that WHERE can see start (motion_start_s), so that a lost answer can be settled.
+  /// A motion whose progress from the arm's rest WHERE can measure: a joint target, or a move
+  /// of the tool relative to itself.
+  struct Motion {
+    std::optional<std::array<double, 6>> joints_deg;  ///< MoveJoints' target
+    Pose3 X_EEnew = Pose3::Identity();                 ///< MoveRelative's move
+  };
+  /// Whether `motion` goes far enough from the rest of the last Read for WHERE to settle a lost
+  /// answer: twice the moved_* threshold.
+  bool Checkable(const Motion& motion) const;
+  /// How far the arm in `report` is on its way from its rest at the last Read towards the end
+  /// of `motion`, in units of the moved_* thresholds (1: the check's threshold). A tool move
+  /// is measured on the tool's location (`located`: the report's location line came through
+  /// intact; NaN when not), or, when the location at the rest is not known, as the joints'
+  /// travel from the rest in any direction (moved_deg).
+  double Progress(const Motion& motion, const val2::WhereReport& report, bool located) const;
+  /// Runs one state-changing command line (the common path of the commands). `motion`: a move
+  /// that WHERE can see (it goes 2 thresholds: see moved_deg), so that a lost answer can be
+  /// settled by the arm.
   device::Status Command(const std::string& line, bool is_stop, bool is_motion,
-                         bool visible = false);
-  /// Whether the arm moves from where it rested at the last Read: WHERE until a joint has left
-  /// that rest by more than still_deg (*moved), or motion_start_s has passed since `since`.
-  device::Status MovedFromRest(Clock::time_point since, CallClock* call, bool* moved);
-  /// One WHERE report, parsed.
-  device::Status Where(CallClock* call, val2::WhereReport* report, double* t_s);
+                         const Motion* motion = nullptr);
+  /// Whether the arm has left the rest of the last Read on its way to `motion` (see moved_deg):
+  /// WHERE until two reports in a row show it on its way (*moved), or two in a row, the second
+  /// asked motion_start_s after `since`, show it not.
+  device::Status MovedFromRest(Clock::time_point since, const Motion& motion, CallClock* call,
+                               bool* moved);
+  /// One WHERE report, parsed: the joints always; the location when `located` says so.
+  device::Status Where(CallClock* call, val2::WhereReport* report, double* t_s,
+                       bool* located = nullptr);
   /// Drives `line` until it has been executed once: types it, checks it, sends CR, resolves
   /// lost answers. `resume`: the line may already be complete in the controller (a retry).
-  /// `check_motion`: a lost answer is settled by MovedFromRest rather than taken as a run.
+  /// `check_motion`: a lost answer is settled by MovedFromRest towards it rather than taken as a
+  /// run.
   device::Status Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
-                       LineOutcome* outcome, bool check_motion = false);
+                       LineOutcome* outcome, const Motion* check_motion = nullptr);
   /// Empties the controller's line without executing `pending` if it is still there. Sets
   /// *executed when `pending` turns out to have been executed.
   device::Status Dispose(const std::string& pending, CallClock* call, bool* executed);
@@ -226,6 +258,9 @@ class Val2Arm final : public device::Arm {
   bool have_prev_ = false;
   double prev_t_ = 0.0;
   std::array<double, 6> prev_deg_{};
+  // The tool (VAL's world frame) where the arm rests at prev_deg_, when known (located_).
+  val2::Trans prev_location_;
+  bool located_ = false;
   bool motion_since_read_ = false;
   // The last Read found the joints unchanged since the one before, with no motion commanded
   // in between: the arm rests at prev_deg_.

@@ -514,6 +514,13 @@ bool ParseWhereJoints(const std::string& values, std::array<double, 6>* joints) 
   return ParseFields(values, kJointDecimals, joints);
 }
 
+bool ParseWhereLocation(const std::string& values, Trans* location) {
+  std::array<double, 6> loc;
+  if (!ParseFields(values, kTransDecimals, &loc)) return false;
+  *location = ArrayTrans(loc);
+  return true;
+}
+
 bool ParseWhere(const std::array<std::string, 4>& lines, WhereReport* report) {
   if (lines[0] != Header(kLocationLabels) || lines[2] != Header(kJointLabels)) return false;
   std::array<double, 6> loc, joints;

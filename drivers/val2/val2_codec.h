@@ -208,6 +208,8 @@ bool ParseWhere(const std::array<std::string, 4>& lines, WhereReport* report);
 /// The joints' line alone (the last line WHERE prints), as strictly. Its format tells it from
 /// every other line of the report: six fields of 3 decimals (the location's X, Y, Z have 2).
 bool ParseWhereJoints(const std::string& values, std::array<double, 6>* joints);
+/// The location's line alone (the second), as strictly: X, Y, Z of 2 decimals, O, A, T of 3.
+bool ParseWhereLocation(const std::string& values, Trans* location);
 
 // ---------------------------------------------------------------------------------------------
 // The controller's output as a stream (driver side).

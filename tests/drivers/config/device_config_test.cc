@@ -66,7 +66,7 @@ TEST(DeviceConfig, EveryDriverOptionReachesItsDriver) {
       "    driver: val2\n"
       "    port: /dev/ttyS0\n"
       "    options: {reply_timeout_s: 0.25, max_errors: 7, confirm_reads: true,\n"
-      "              max_joint_speed_deg_s: [10, 20, 30, 40, 50, 60]}\n"
+      "              max_joint_speed_deg_s: [10, 20, 30, 40, 50, 60], moved_mm: 0.8}\n"
       "  hand_left: {driver: sensorhand, port: /dev/ttyS2, options: {full_speed_m_s: 0.2}}\n"
       "  head:\n"
       "    driver: biclops\n"
@@ -82,6 +82,7 @@ TEST(DeviceConfig, EveryDriverOptionReachesItsDriver) {
   EXPECT_EQ(arm.max_errors, 7);
   EXPECT_TRUE(arm.confirm_reads);
   EXPECT_EQ(arm.max_joint_speed_deg_s[5], 60.0);
+  EXPECT_EQ(arm.moved_mm, 0.8);
   EXPECT_EQ(arm.echo_timeout_s, Val2Options{}.echo_timeout_s);  // not named: the default
   EXPECT_EQ(c.Backend<SensorHandBackend>("hand_left")->options.full_speed_m_s, 0.2);
   const BiclopsOptions& head = c.Backend<BiclopsBackend>("head")->options;

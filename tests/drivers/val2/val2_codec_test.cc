@@ -350,6 +350,20 @@ TEST(Val2Where, RoundTripAndStrictness) {
   EXPECT_FALSE(ParseWhere(lines, &back));
 }
 
+TEST(Val2Where, LocationLineAloneParsesAsStrictly) {
+  WhereReport r;
+  r.location = RoundForWire({100.25, -200.5, 300, 10.125, 20, -30.001});
+  r.joints = {1.5, -60.25, 30.125, 0.0, -45.001, 359.999};
+  const std::array<std::string, 4> lines = FormatWhere(r);
+  Trans location;
+  ASSERT_TRUE(ParseWhereLocation(lines[1], &location));
+  EXPECT_EQ(location, r.location);
+  // No other line passes for it (the joints carry 3 decimals), nor a damaged one.
+  for (int k : {0, 2, 3}) EXPECT_FALSE(ParseWhereLocation(lines[k], &location)) << lines[k];
+  EXPECT_FALSE(ParseWhereLocation(lines[1] + " ", &location));
+  EXPECT_FALSE(ParseWhereLocation("#" + lines[1].substr(1), &location));
+}
+
 TEST(Val2Where, JointsLineAloneParsesAsStrictly) {
   WhereReport r;
   r.location = RoundForWire({100, -200, 300, 10, 20, 30});

@@ -287,14 +287,61 @@ class CrLoser final : public ByteLink {
   Clock::time_point until_{};
 };
 
+// A ByteLink that, once armed, changes one digit of the next `reports` WHERE reports: the units
+// digit of JT1 goes one up (9 to 0), as a byte corrupted into another digit does. The report still
+// parses (VAL has no checksum): JT1 reads a degree or nine off. SpoilLocations: every report's
+// location line is damaged (its first byte), so the driver never learns where the tool is.
+class JointDigitFlip final : public ByteLink {
+ public:
+  explicit JointDigitFlip(std::unique_ptr<ByteLink> inner) : inner_(std::move(inner)) {}
+  void Arm(int reports) { left_ = reports; }
+  void SpoilLocations() { spoil_ = true; }
+  Status Write(std::span<const std::uint8_t> bytes) override { return inner_->Write(bytes); }
+  Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+    const Status s = inner_->Read(buf, timeout_s, n);
+    if (s != Status::kOk) return s;
+    for (std::size_t k = 0; k < *n; ++k) {
+      const char c = static_cast<char>(buf[k]);
+      if (column_ >= 0 && ++column_ == 6) {  // "     0.000": the units digit of JT1
+        column_ = -1;
+        if (left_ > 0 && c >= '0' && c <= '9') {
+          buf[k] = static_cast<std::uint8_t>('0' + (c - '0' + 1) % 10);
+          --left_;
+        }
+      }
+      if (spoil_ && location_next_) buf[k] = '#';
+      location_next_ = false;
+      seen_ = (seen_ + c).substr(seen_.size() >= 6 ? 1 : 0);
+      if (seen_.ends_with("JT6\r\n")) column_ = 0;         // the joints' line begins
+      if (seen_ == "   T\r\n") location_next_ = true;  // the location's line begins
+    }
+    return s;
+  }
+  void Discard() override { inner_->Discard(); }
+
+ private:
+  std::unique_ptr<ByteLink> inner_;
+  int left_ = 0, column_ = -1;
+  bool spoil_ = false, location_next_ = false;
+  std::string seen_;
+};
+
 struct LossRig {
-  LossRig() : host(MakeVal2Emulator()) {
+  explicit LossRig(std::unique_ptr<Val2Emulator> emulator = MakeVal2Emulator())
+      : host(std::move(emulator)) {
     auto loser_owned = std::make_unique<CrLoser>(OpenPort(host.port()));
     loser = loser_owned.get();
-    arm = std::make_unique<Val2Arm>(std::move(loser_owned));
+    auto flip_owned = std::make_unique<JointDigitFlip>(std::move(loser_owned));
+    flip = flip_owned.get();
+    Val2Options options;
+    if (std::getenv("VAL2_TRACE")) {
+      options.trace = [](const std::string& t) { std::fprintf(stderr, "%s\n", t.c_str()); };
+    }
+    arm = std::make_unique<Val2Arm>(std::move(flip_owned), options);
   }
   EmulatorHost host;
   CrLoser* loser;
+  JointDigitFlip* flip;
   std::unique_ptr<Val2Arm> arm;
 };
 
@@ -398,6 +445,127 @@ TEST(Val2Faults, CrDamagedIntoACancelWithItsEchoLostIsTypedAgain) {
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);
   EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
   EXPECT_EQ(rig.arm->counters().unrun_found, 1);
+}
+
+// Bug fix (a whole grasp through the twin's noisy wires, CI): the lift's last step was lost. Its
+// CR was damaged into a cancel and the echo lost; the first WHERE of the check had a digit
+// corrupted into another, which no parse can see, and one report a hair off the rest was taken
+// for the motion: the driver reported the step done and recorded it as run. The arm's progress
+// along the move must show in two reports in a row.
+TEST(Val2Faults, ACorruptedDigitInTheCheckingReportIsNoMotion) {
+  LossRig rig;
+  Rest(rig);
+  rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+  rig.flip->Arm(1);  // the check's first report: JT1 a degree on, towards kA
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+  EXPECT_EQ(rig.arm->counters().unrun_found, 1);
+  const auto log = rig.arm->command_log().Snapshot();
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_EQ(log[0].command, Line(kA));
+}
+
+// The arm of MakeVal2Emulator with its second joint creeping on at `deg_per_s`, as an arm
+// settling under a load does: slower than Read's still_deg between two reads, so it rests.
+class CreepingArm final : public Val2ArmModel {
+ public:
+  CreepingArm(std::unique_ptr<Val2Emulator> base, double deg_per_s)
+      : base_(std::move(base)), rate_(DegToRad(deg_per_s)) {}
+  Joint6 q() const override {
+    Joint6 q = base_->model().q();
+    q[1] += creep_;
+    return q;
+  }
+  Joint6 qd() const override { return base_->model().qd(); }
+  bool moving() const override { return base_->model().moving(); }
+  void MoveJoints(const Joint6& q_target, double speed) override {
+    base_->model().MoveJoints(q_target, speed);
+  }
+  void Stop() override { base_->model().Stop(); }
+  void Advance(double dt) override {
+    base_->model().Advance(dt);
+    creep_ += rate_ * dt;
+  }
+
+ private:
+  std::unique_ptr<Val2Emulator> base_;
+  double rate_, creep_ = 0.0;
+};
+
+std::unique_ptr<Val2Emulator> Creeping(double deg_per_s) {
+  auto base = MakeVal2Emulator();
+  robot::ArmKinematics kinematics = base->kinematics();
+  const Pose3 X_WB = base->X_WB();
+  return std::make_unique<Val2Emulator>(std::make_unique<CreepingArm>(std::move(base), deg_per_s),
+                                        std::move(kinematics), X_WB);
+}
+
+// Bug fix: an arm at rest that creeps (0.025 deg/s, 0.007 deg between two reads) passed, over the
+// check's second report, the 0.01 deg that counted as motion: a cancelled move was taken as run.
+TEST(Val2Faults, AnArmCreepingAtRestIsNoMotion) {
+  LossRig rig(Creeping(0.1));
+  Rest(rig);
+  rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);
+  EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
+  EXPECT_EQ(rig.arm->counters().unrun_found, 1);
+}
+
+// A tool move (the servo's and the lift's) is judged along the tool's path: lost answer of a
+// move that ran, and of one cancelled.
+TEST(Val2Faults, LostAnswersOfToolMovesAreSettledAlongTheToolsPath) {
+  Pose3 up = Pose3::Identity();
+  up.translate(Eigen::Vector3d(0.0, 0.004, -0.015));
+  const std::string line = val2::Encode(val2::MoveRelativeCommand(val2::PoseToTrans(up)));
+  {
+    LossRig rig;
+    Rest(rig);
+    rig.loser->Arm(false, 0.12);
+    EXPECT_EQ(rig.arm->MoveRelative(up), Status::kOk);
+    EXPECT_EQ(Executed(rig.host), std::vector<std::string>{line});
+    EXPECT_EQ(rig.arm->counters().motion_checks, 1);
+    EXPECT_EQ(rig.arm->counters().unrun_found, 0);
+  }
+  {
+    LossRig rig;
+    Rest(rig);
+    rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+    rig.flip->Arm(1);
+    EXPECT_EQ(rig.arm->MoveRelative(up), Status::kOk);
+    EXPECT_EQ(Executed(rig.host), std::vector<std::string>{line});
+    EXPECT_EQ(rig.arm->counters().unrun_found, 1);
+  }
+  // A turn of the tool alone.
+  Pose3 turn = Pose3::Identity();
+  turn.rotate(Eigen::AngleAxisd(DegToRad(3.0), Eigen::Vector3d::UnitX()));
+  const std::string turn_line = val2::Encode(val2::MoveRelativeCommand(val2::PoseToTrans(turn)));
+  for (const bool ran : {true, false}) {
+    LossRig rig;
+    Rest(rig);
+    if (ran) {
+      rig.loser->Arm(false, 0.12);
+    } else {
+      rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+    }
+    EXPECT_EQ(rig.arm->MoveRelative(turn), Status::kOk) << ran;
+    EXPECT_EQ(Executed(rig.host), std::vector<std::string>{turn_line}) << ran;
+    EXPECT_EQ(rig.arm->counters().unrun_found, ran ? 0 : 1) << ran;
+  }
+  // No location line ever intact: the joints' travel from the rest tells.
+  for (const bool ran : {true, false}) {
+    LossRig rig;
+    rig.flip->SpoilLocations();
+    Rest(rig);
+    if (ran) {
+      rig.loser->Arm(false, 0.12);
+    } else {
+      rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+    }
+    EXPECT_EQ(rig.arm->MoveRelative(up), Status::kOk) << ran;
+    EXPECT_EQ(Executed(rig.host), std::vector<std::string>{line}) << ran;
+    EXPECT_EQ(rig.arm->counters().motion_checks, 1) << ran;
+    EXPECT_EQ(rig.arm->counters().unrun_found, ran ? 0 : 1) << ran;
+  }
 }
 
 // A ByteLink that, once armed, sends the next character typed alone twice and loses the first
