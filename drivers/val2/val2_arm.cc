@@ -73,6 +73,15 @@ std::string FirstError(const std::string& output) {
 // arrives intact one time in ten, its last line (62) one time in two, and each report takes
 // 0.27 s at 9600 baud; with the whole report required, one Read in seven found none intact
 // within max_call_s.
+// Two WHERE locations of a tool at rest: within a tenth of the check's thresholds (moved_mm,
+// moved_turn_deg at their defaults), more than WHERE's last digits and an arm's creep between two
+// reads (still_deg at 0.45 m: 0.08 mm), less than a corrupted digit of the tenths or above.
+bool SameLocation(const val2::Trans& a, const val2::Trans& b) {
+  const Pose3 A = val2::TransToPose(a), B = val2::TransToPose(b);
+  return 1e3 * (A.translation() - B.translation()).norm() <= 0.1 &&
+         RadToDeg(Eigen::AngleAxisd(A.linear().transpose() * B.linear()).angle()) <= 0.05;
+}
+
 // The joints (the last line); and the location, when a line before them reads as one
 // (*located: the location's line came through intact).
 bool ParseWhereOutput(const std::string& output, val2::WhereReport* report, bool* located) {
@@ -182,11 +191,19 @@ Status Val2Arm::Read(device::ArmState* state) {
   have_prev_ = true;
   prev_t_ = t;
   prev_deg_ = report.joints;
+  // The tool's rest: two location lines read at this rest that agree (a digit corrupted into
+  // another passes the parse, and a rest read wrong would misjudge every check from it). Once
+  // known, it holds until the arm moves.
+  if (state->moving) located_ = false;
   if (located) {
-    prev_location_ = report.location;
-    located_ = true;
+    if (!state->moving && candidate_location_ &&
+        SameLocation(*candidate_location_, report.location)) {
+      prev_location_ = report.location;
+      located_ = true;
+    }
+    candidate_location_ = report.location;
   } else if (state->moving) {
-    located_ = false;  // (at rest, the location read earlier at this rest still holds)
+    candidate_location_.reset();
   }
   needs_read_ = false;
   blind_typed_ = false;
@@ -402,10 +419,10 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       if (armed && std::find(guesses_.begin(), guesses_.end(), line) == guesses_.end()) {
         guesses_.push_back(line);
       }
-    } else if (armed && Gone(buf_, line) && cancel_trace && !execution_trace) {
+    } else if (armed && Gone(buf_, line) && cancel_trace && !execution_trace && !check_motion) {
       armed = false;  // gone, and the answers show a cancel and no execution: it did not run
       continue;
-    } else if (armed && Gone(buf_, line) && message_trace) {
+    } else if (armed && Gone(buf_, line) && message_trace && !check_motion) {
       // Gone, and an answer too damaged to classify held a message: the line that ran printed
       // it, so it was not the command (which runs silently; a CR damaged into a character had
       // left it with a character more) or the command refused. It did not take effect: typed
@@ -421,7 +438,8 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       }
       if (check_motion) {
         // The whole answer lost: a silent run, a refusal's message or a cancel's echo look
-        // the same. The arm rested and the move is visible: WHERE tells.
+        // the same, and so do the traces of damaged answers. The arm rested and the move is
+        // visible: WHERE tells, whatever the traces.
         bool moved = false;
         const Status ms = MovedFromRest(Clock::now(), *check_motion, call, &moved);
         if (ms != Status::kOk) {
@@ -507,7 +525,12 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
     } else if (!known_ || buf_ != before) {
       verified = false;
     }
-    if (r.kind == Reaction::Kind::kCancel) armed = false;
+    // A cancel the driver did not send (it sends ^U only unarmed): line noise made one, or an
+    // answer damaged in one byte reads as one (the retype of an empty line, "^R" CR LF ".", and a
+    // cancel's echo, "^U" CR LF ".", differ in one byte). When the command may have run before,
+    // the cancel does not say whether it did: for a move from rest WHERE tells (the line is gone,
+    // below); otherwise it is taken as not run.
+    if (r.kind == Reaction::Kind::kCancel && !(armed && check_motion)) armed = false;
     if (r.kind != Reaction::Kind::kExecuted) continue;
 
     // A line ran. Only the command itself (no part of it is a command; a damaged one is not a

@@ -261,6 +261,8 @@ class Val2Arm final : public device::Arm {
   // The tool (VAL's world frame) where the arm rests at prev_deg_, when known (located_).
   val2::Trans prev_location_;
   bool located_ = false;
+  // The location of the previous Read, when its line came through, since the arm last moved.
+  std::optional<val2::Trans> candidate_location_;
   bool motion_since_read_ = false;
   // The last Read found the joints unchanged since the one before, with no motion commanded
   // in between: the arm rests at prev_deg_.
