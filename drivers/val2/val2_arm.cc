@@ -67,12 +67,6 @@ std::string FirstError(const std::string& output) {
   return "";
 }
 
-// The joints from the output of WHERE: its last line, strictly parsed (its format is the joints'
-// alone). The three lines before it are not needed (Read reports joints only) and not required
-// intact: on a line that corrupts 1 % of its bytes each way, a whole report (248 characters)
-// arrives intact one time in ten, its last line (62) one time in two, and each report takes
-// 0.27 s at 9600 baud; with the whole report required, one Read in seven found none intact
-// within max_call_s.
 // Two WHERE locations of a tool at rest: within a tenth of the check's thresholds (moved_mm,
 // moved_turn_deg at their defaults), more than WHERE's last digits and an arm's creep between two
 // reads (still_deg at 0.45 m: 0.08 mm), less than a corrupted digit of the tenths or above.
@@ -82,8 +76,12 @@ bool SameLocation(const val2::Trans& a, const val2::Trans& b) {
          RadToDeg(Eigen::AngleAxisd(A.linear().transpose() * B.linear()).angle()) <= 0.05;
 }
 
-// The joints (the last line); and the location, when a line before them reads as one
-// (*located: the location's line came through intact).
+// The joints from the output of WHERE: its last line, strictly parsed (its format is the joints'
+// alone). The three lines before it are not required intact: on a line that corrupts 1 % of its
+// bytes each way, a whole report (248 characters) arrives intact one time in ten, its last line
+// (62) one time in two, and each report takes 0.27 s at 9600 baud; with the whole report
+// required, one Read in seven found none intact within max_call_s. The location (for the checks
+// of lost answers) is taken when a line before the joints reads as one (*located).
 bool ParseWhereOutput(const std::string& output, val2::WhereReport* report, bool* located) {
   val2::OutputDecoder dec;
   dec.Feed(output);
