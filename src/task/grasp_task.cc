@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "common/error.h"
@@ -370,6 +371,10 @@ bool GraspTask::Look() {
   if (result_.scene->boxes.empty()) return Fail(Failure::kNoTarget, "no box found");
   result_.target = model::ChooseByColour(result_.scene->colours, *colour);
   if (!result_.target) return Fail(Failure::kNoTarget, "no " + std::string(*colour) + " box found");
+  // The box as the look saw it, to measure its rise by after the lift.
+  result_.box_before = MeasureBoxHeights(
+      result_.scan->range, result_.scene->boxes[*result_.target],
+      result_.scene->colours[*result_.target].name_index, 0.0, config_.rise);
   EndStage();
   return true;
 }
@@ -518,6 +523,19 @@ bool GraspTask::Lift() {
     step.translation() = up.translation() / steps;
     if (!MoveAndWait(step, "lift", "the arm refused the lift (out of reach)")) return false;
   }
+  // The rise as the cameras see the gripper: a loaded arm, or a controller's relative moves,
+  // can come up short (through the twin's VAL II consoles, 3-4 mm of 50). The shortfall is
+  // moved again, as the servo moves to a target.
+  for (int k = 0; k < config_.max_lift_corrections && tracker_->tracking(); ++k) {
+    const Pose3 X_WE_now = model_.head.X_WC(kCL, last_frame_.head) * tracker_->pose();
+    const double short_m = config_.lift_m - (X_WE_now.translation().z() - z0);
+    if (short_m <= config_.lift_tolerance_m) break;
+    Pose3 step = Pose3::Identity();
+    step.translation() = X_WE_now.linear().transpose() *
+                         Eigen::Vector3d(0, 0, std::min(short_m, config_.law.max_translation_step));
+    if (!MoveAndWait(step, "lift", "the arm refused the lift (out of reach)")) return false;
+    ++result_.lift_corrections;
+  }
   // Hold it up.
   const double t_up = last_frame_.t_s;
   while (last_frame_.t_s - t_up < config_.hold_s) {
@@ -525,7 +543,7 @@ bool GraspTask::Lift() {
   }
   if (tracker_->tracking()) {
     X_WC = model_.head.X_WC(kCL, last_frame_.head);
-    result_.lift_height_m = (X_WC * tracker_->pose()).translation().z() - z0;
+    result_.gripper_rise_m = (X_WC * tracker_->pose()).translation().z() - z0;
   }
   device::HandState hand;
   if (!DeviceOk(dev_->HandOf(side).Read(&hand), HandKey(), "read")) return false;
@@ -533,6 +551,44 @@ bool GraspTask::Lift() {
   Moment("lifted");
   if (hand.opening_m < config_.min_held_opening_m) {
     return Fail(Failure::kGraspSlipped, "the box slipped out of the hand while held up");
+  }
+  // The box itself, as the cameras see it now: the gripper may have risen without it. The
+  // stripe positions that light the modelled box at any rise the check tries.
+  scan::Scanner scanner(model_.head, model_.cameras, model_.laser);
+  const model::BoxModel& box = result_.scene->boxes[*result_.target];
+  const auto [first, last] =
+      CountsLightingBox(box, config_.lift_m, model_.laser, model_.head.X_WH(last_frame_.head),
+                        config_.sweep, config_.rise);
+  scan::SweepConfig sweep = RiseSweep(first, last, config_.sweep, config_.rise);
+  if (sweep.stop == nullptr) sweep.stop = config_.stop;
+  const scan::ScanResult rescan = scanner.Scan(*dev_, sweep);
+  if (rescan.status == device::Status::kInterrupted) return DeviceOk(rescan.status, "", "scan");
+  if (rescan.status != device::Status::kOk) {
+    result_.failed_device = rescan.failed_device;
+    return Fail(Failure::kDeviceError, rescan.failed_device + ": " +
+                                           std::string(device::ToString(rescan.status)) +
+                                           " during the scan of the lifted box");
+  }
+  const Eigen::Vector3d camera_W = model_.head.X_WC(kCL, last_frame_.head).translation();
+  result_.box_rise = MeasureRise(rescan.range, box,
+                                 result_.scene->colours[*result_.target].name_index, camera_W,
+                                 config_.lift_m, config_.rise,
+                                 result_.box_before ? &*result_.box_before : nullptr);
+  const BoxRise& rise = *result_.box_rise;
+  if (!rise.consistent()) {
+    return Fail(Failure::kGraspSlipped,
+                "the cameras saw the box where no box raised straight up can be (" +
+                    std::to_string(rise.box_cells) + " of its cells): it tipped or moved");
+  }
+  // The rises tried are whole millimetres: 45 mm passes a 45 mm bound.
+  if (rise.min_m < config_.min_rise_fraction * config_.lift_m - 1e-9) {
+    char why[200];
+    std::snprintf(why, sizeof why,
+                  "the cameras cannot rule out that the box rose only %.1f mm (rises %.1f-%.1f "
+                  "mm fit what they saw, %d of its cells), under %.0f%% of the %.1f mm lift",
+                  1e3 * rise.min_m, 1e3 * rise.min_m, 1e3 * rise.max_m, rise.box_cells,
+                  100 * config_.min_rise_fraction, 1e3 * config_.lift_m);
+    return Fail(Failure::kGraspSlipped, why);
   }
   result_.lifted = true;
   EndStage();

@@ -50,6 +50,7 @@
 #include "servo/gripper_tracker.h"
 #include "servo/head_tracking.h"
 #include "servo/led_layout.h"
+#include "task/box_rise.h"
 
 namespace hgrasp::task {
 
@@ -106,6 +107,15 @@ struct TaskConfig {
   /// comes up at 50 %); the simulated arms run at their limits unless told otherwise.
   double arm_speed = 1.0;
   double grip_force_n = 40.0;  ///< Hand::Close force (N)
+  /// The lift is judged by the box: after the hold the stripe positions that lit the box in the
+  /// look are scanned again, and the box counts as lifted when what the cameras saw rules out
+  /// every rise under min_rise_fraction of lift_m (task/box_rise.h); else grasp_slipped.
+  BoxRiseConfig rise;
+  /// After the lift's moves the gripper's rise is measured by its LEDs; short by more than
+  /// lift_tolerance_m, the rest is moved again, at most max_lift_corrections times.
+  double lift_tolerance_m = 0.001;
+  int max_lift_corrections = 2;
+  double min_rise_fraction = 0.9;
   /// The grasp holds while the fingers stay at least this far apart (m): closed to less, they
   /// met with nothing between them.
   double min_held_opening_m = 0.01;
@@ -176,10 +186,19 @@ struct TaskResult {
   int head_moves = 0;                   ///< head re-centrings
   // Close and lift
   double held_opening_m = 0;  ///< finger opening after closing (m)
-  bool lifted = false;        ///< lifted and still held after hold_s
-  /// Rise of the gripper measured by the cameras between the grasp and the end of the hold (m,
-  /// W z through the head kinematics).
-  double lift_height_m = 0;
+  /// Lifted and still held after hold_s: the cameras measured the box risen by at least
+  /// min_rise_fraction of lift_m, and the fingers still hold something.
+  bool lifted = false;
+  /// The box's cells in the look's scan, before the grasp (none: too few of them): the rise's
+  /// measure starts from them.
+  std::optional<BoxHeights> box_before;
+  /// The rises of the box the cameras' rise scan after the hold leaves possible; unset when the
+  /// task ended before it.
+  std::optional<BoxRise> box_rise;
+  /// Rise of the gripper measured by the cameras (its LEDs) between the grasp and the end of
+  /// the hold (m, W z through the head kinematics).
+  double gripper_rise_m = 0;
+  int lift_corrections = 0;  ///< moves after the lift's own, for its shortfall
 
   std::vector<StageTiming> stages;
   double wall_s = 0;    ///< the whole task (s)

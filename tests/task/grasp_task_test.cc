@@ -20,8 +20,13 @@ TEST(GraspTaskSim, DefaultScenarioIsGraspedAndTheSameSeedGivesTheSameRun) {
   const testing::SimOutcome a = RunInSim(scenario);
   Print("default", a);
   EXPECT_TRUE(a.Success()) << a.result.message;
-  EXPECT_GT(a.result.lift_height_m, 0.8 * scenario.task->lift_m);
-  EXPECT_LT(a.result.lift_height_m, 1.2 * scenario.task->lift_m);
+  EXPECT_GT(a.result.gripper_rise_m, 0.8 * scenario.task->lift_m);
+  EXPECT_LT(a.result.gripper_rise_m, 1.2 * scenario.task->lift_m);
+  // The cameras knew the box itself risen at least 45 mm, and the truth lies in what they left.
+  ASSERT_TRUE(a.result.box_rise);
+  EXPECT_GE(a.result.box_rise->min_m, 0.045);
+  EXPECT_LE(a.result.box_rise->min_m, a.rise_m + 0.002);
+  EXPECT_GE(a.result.box_rise->max_m, a.rise_m - 0.002);
   // Deterministic: the same scenario and seed give the same figures (timings aside), whether or
   // not the frames of the waits come with images.
   const testing::SimOutcome b = RunInSim(scenario, {}, {}, /*every_image=*/false);
@@ -33,7 +38,10 @@ TEST(GraspTaskSim, DefaultScenarioIsGraspedAndTheSameSeedGivesTheSameRun) {
     EXPECT_EQ(a.result.servo[i].final_error.rotation_rad,
               b.result.servo[i].final_error.rotation_rad);
   }
-  EXPECT_EQ(a.result.lift_height_m, b.result.lift_height_m);
+  EXPECT_EQ(a.result.gripper_rise_m, b.result.gripper_rise_m);
+  ASSERT_TRUE(b.result.box_rise);
+  EXPECT_EQ(a.result.box_rise->min_m, b.result.box_rise->min_m);
+  EXPECT_EQ(a.result.box_rise->max_m, b.result.box_rise->max_m);
   EXPECT_EQ(a.result.device_s, b.result.device_s);
   EXPECT_EQ(a.result.measurements, b.result.measurements);
   EXPECT_EQ(a.rise_m, b.rise_m);
@@ -77,6 +85,40 @@ TEST(GraspTaskSim, FramesOfTheWaitsComeWithoutImagesUnlessTheSinkNeedsEveryImage
 // The paper's claim: no camera-to-arm calibration. The head is really mounted 2 cm and 3 deg
 // away from where the kinematics (URDF) put it; the open-loop approach misses the pre-grasp by
 // centimetres, and the servo still brings the hand onto the planned grasp.
+// Issue 19: the lift is judged by the box the cameras see, not by the gripper. The heaviest box
+// the scenario schema allows, gripped at 1 N: the fingers slide up its sides (2 pads x friction
+// 1.5 x 1 N = 3 N against its 4.9 N weight) and stay on it, so the hand still holds something,
+// and the gripper rose the whole lift. The old verdict said lifted.
+TEST(GraspTaskSim, ABoxTheFingersSlideAlongIsGraspSlippedNotLifted) {
+  sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  scenario.objects[0].mass = sim::kMaxMass;
+  const testing::SimOutcome a = RunInSim(scenario, {}, {}, false,
+                                         [](TaskConfig* c) { c->grip_force_n = 1.0; });
+  Print("slides", a);
+  EXPECT_EQ(a.result.failure, Failure::kGraspSlipped) << a.result.message;
+  EXPECT_FALSE(a.result.lifted);
+  EXPECT_LT(a.rise_m, 0.045);                    // truth: the box stayed low
+  EXPECT_GT(a.result.gripper_rise_m, 0.045);     // the gripper did not
+  EXPECT_GT(a.result.held_opening_m, 0.01);      // and the fingers still held the box
+  ASSERT_TRUE(a.result.box_rise);
+  EXPECT_LT(a.result.box_rise->min_m, 0.045);
+  EXPECT_LE(a.result.box_rise->min_m, a.rise_m + 0.002);
+}
+
+// The heaviest box the schema allows, at the task's grip force (40 N: 2 pads x 1.5 x 40 N =
+// 120 N of friction for its 4.9 N), is lifted and held, by truth and by the cameras.
+TEST(GraspTaskSim, TheHeaviestBoxAllowedIsLiftedAndHeld) {
+  sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
+  scenario.objects[0].mass = sim::kMaxMass;
+  const testing::SimOutcome a = RunInSim(scenario, {}, {}, false);
+  Print("heaviest", a);
+  EXPECT_TRUE(a.Success()) << a.result.message;
+  EXPECT_GE(a.rise_m, 0.045);
+  ASSERT_TRUE(a.result.box_rise);
+  EXPECT_GE(a.result.box_rise->min_m, 0.045);
+  EXPECT_LE(a.result.box_rise->min_m, a.rise_m + 0.002);
+}
+
 TEST(GraspTaskSim, NoHandEyeCalibrationNeeded) {
   const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
   sim::WorldOptions options;
@@ -143,10 +185,13 @@ TEST(GraspTaskSim, ALaserThatTimesOutDuringTheScanIsADeviceError) {
 
 // Issue 7's acceptance: over 20 seeded random scenes whose target the open hand can span, the
 // servo brings the gripper within 5 mm and 2 deg of the planned grasp and the box comes up by
-// task.lift and stays up for 2 s, in at least 95% of them.
+// task.lift and stays up for 2 s, in at least 95% of them (by the truth). Issue 19: no run says
+// lifted when the box rose under 45 mm; the cameras confirm the lift in most (a box the hand
+// and the forearm hide from the head is reported grasp_slipped: seeds 3 and 26, where not one
+// of its cells is seen after the lift).
 TEST(GraspTaskSim, RandomScenes) {
   const int scenes = 20;
-  int good = 0, tried = 0;
+  int good = 0, tried = 0, confirmed = 0, false_lifts = 0;
   for (int seed = 1, n = 0; n < scenes; ++seed) {
     const sim::Scenario scenario = sim::RandomBoxScene(seed);
     ++tried;
@@ -158,10 +203,17 @@ TEST(GraspTaskSim, RandomScenes) {
     ++n;
     const testing::SimOutcome o = RunInSim(scenario);
     Print("seed " + std::to_string(seed), o);
-    good += o.Success();
+    good += o.TrulyGrasped();
+    confirmed += o.Success();
+    false_lifts += o.FalselyLifted(scenario.task->lift_m);
   }
-  std::printf("%d of %d scenes (seeds 1-%d) within 5 mm / 2 deg and held\n", good, scenes, tried);
+  std::printf(
+      "%d of %d scenes (seeds 1-%d) within 5 mm / 2 deg and held by truth; the cameras confirmed "
+      "%d; %d said lifted falsely\n",
+      good, scenes, tried, confirmed, false_lifts);
   EXPECT_GE(good, 0.95 * scenes);
+  EXPECT_EQ(false_lifts, 0);
+  EXPECT_GE(confirmed, 0.75 * scenes);
 }
 
 }  // namespace

@@ -20,15 +20,20 @@ struct SimOutcome {
   sim::PoseError after_approach;  // true gripper pose against the pre-grasp, before the servo
   sim::PoseError at_grasp;        // true gripper pose against the planned grasp, then
   double rise_m = 0;              // the target object's true rise at the end of the hold
-  bool held = false;              // risen by 80% of task.lift at the end of the 2 s hold
+  bool held = false;              // risen by 90% of task.lift at the end of the 2 s hold
   double sim_s = 0;
 
   /// Issue 7's criterion: the servo reached the grasp within 5 mm and 2 deg (truth) and the box
   /// was lifted and held.
-  bool Success() const {
-    return result.ok() && reached && at_grasp.translation_m <= 0.005 &&
-           at_grasp.rotation_rad <= DegToRad(2.0) && held;
+  bool Success() const { return result.ok() && TrulyGrasped(); }
+  // By the truth alone: the grasp reached within 5 mm / 2 deg and the box held up, whatever the
+  // cameras could confirm afterwards (the task then says lifted or grasp_slipped).
+  bool TrulyGrasped() const {
+    return (result.ok() || result.failure == Failure::kGraspSlipped) && reached &&
+           at_grasp.translation_m <= 0.005 && at_grasp.rotation_rad <= DegToRad(2.0) && held;
   }
+  // The task said lifted, the truth says the box rose under 90 % of the lift.
+  bool FalselyLifted(double lift_m) const { return result.lifted && rise_m < 0.9 * lift_m; }
 };
 
 inline TaskConfig ConfigFor(const sim::Scenario& scenario) {
@@ -49,9 +54,11 @@ using FrameHook = std::function<void(const device::StereoFrame&, const TaskView&
 /// Runs the whole task; `on_frame` sees every frame (e.g. to hide the LEDs), with its images
 /// unless not `every_image` (TaskConfig::sink_needs_every_image). The truth of the grasp is taken
 /// when the servo reaches it, that of the approach when the servo starts.
+/// `tweak` may change the task's configuration before it runs.
 inline SimOutcome RunInSim(const sim::Scenario& scenario,
                            const sim::WorldOptions& world_options = {},
-                           const FrameHook& on_frame = {}, bool every_image = true) {
+                           const FrameHook& on_frame = {}, bool every_image = true,
+                           const std::function<void(TaskConfig*)>& tweak = {}) {
   sim::SimRobot robot(scenario, world_options);
   device::RobotDevices dev = robot.TakeDevices();
   const RobotModel model = SimRobotModel();
@@ -73,6 +80,7 @@ inline SimOutcome RunInSim(const sim::Scenario& scenario,
   };
   TaskConfig config = ConfigFor(scenario);
   config.sink_needs_every_image = every_image;
+  if (tweak) tweak(&config);
   GraspTask task(&dev, model, config, sink);
   task_ptr = &task;
   bool ok = task.Look() && task.Plan();
@@ -92,7 +100,7 @@ inline SimOutcome RunInSim(const sim::Scenario& scenario,
   out.result = task.result();
   if (object != nullptr) {
     out.rise_m = robot.world().BodyPose(object->body).translation().z() - z0;
-    out.held = out.rise_m > 0.8 * scenario.task->lift_m;
+    out.held = out.rise_m >= 0.9 * scenario.task->lift_m;
   }
   out.sim_s = robot.world().time();
   return out;
