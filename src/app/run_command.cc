@@ -2,6 +2,7 @@
 // pictures, the left camera's video and the report; the simulator's ground truth added to the
 // report only when every device is simulated (never given to the pipeline).
 
+#include <cmath>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -183,7 +184,23 @@ int Run(const RunOptions& o) {
   report["failed_device"] =
       r.failed_device.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.failed_device);
   report["safe_stop"] = safe.Json();
-  report["result"] = {{"lifted", r.lifted}, {"lift_height", r.lift_height_m}};
+  // lift_height: the least rise of the box that the cameras' rise scan after the hold leaves
+  // possible (null when it was not measured, or nothing fits); the gripper's, by its LEDs, beside
+  // it.
+  nlohmann::json rise = nullptr;
+  const bool measured = r.box_rise && r.box_rise->consistent();
+  if (r.box_rise) {
+    rise = {{"min", measured ? nlohmann::json(r.box_rise->min_m) : nlohmann::json(nullptr)},
+            {"max", measured ? nlohmann::json(r.box_rise->max_m) : nlohmann::json(nullptr)},
+            {"box_cells", r.box_rise->box_cells},
+            {"cells", r.box_rise->cells}};
+  }
+  report["result"] = {
+      {"lifted", r.lifted},
+      {"lift_height", measured ? nlohmann::json(r.box_rise->min_m) : nlohmann::json(nullptr)},
+      {"box_rise", rise},
+      {"gripper_rise", r.gripper_rise_m},
+      {"lift_corrections", r.lift_corrections}};
   report["task"] = {{"lift", config.lift_m}, {"hold_s", config.hold_s}};
   nlohmann::json phases = nlohmann::json::array();
   for (const task::ServoPhase& p : r.servo) {
@@ -237,9 +254,11 @@ int Run(const RunOptions& o) {
                          1e3 * p.final_error.translation_m, RadToDeg(p.final_error.rotation_rad));
   }
   spdlog::info(
-      "run: {}; servo:{} lift {:.1f} mm; device time {:.1f} s, wall {:.1f} s ({:.2f}x real "
-      "time); {} pictures; wrote {}",
-      ok ? "lifted" : std::string(task::ToString(r.failure)), servo, 1e3 * r.lift_height_m,
+      "run: {}; servo:{} box risen at least {:.1f} mm (cameras), gripper {:.1f} mm; device time "
+      "{:.1f} s, wall {:.1f} s ({:.2f}x real time); {} pictures; wrote {}",
+      ok ? "lifted" : std::string(task::ToString(r.failure)), servo,
+      r.box_rise && r.box_rise->consistent() ? 1e3 * r.box_rise->min_m : std::nan(""),
+      1e3 * r.gripper_rise_m,
       r.device_s, Seconds(t0), r.device_s > 0 ? r.device_s / Seconds(t0) : 0.0, pictures,
       o.out_dir);
   if (!ok) spdlog::warn("run: {}: {}", task::ToString(r.failure), r.message);

@@ -109,6 +109,7 @@ void AddFigures(const json& report, const std::string& stage, json* row) {
     const json lifted = report.value("/result/lifted"_json_pointer, json(false));
     r["lift"] = {{"lifted", lifted},
                  {"true_rise_mm", rise},
+                 {"measured_rise_mm", Number(report, "/result/lift_height", 1e3)},
                  {"task_lift_mm", Number(report, "/task/lift", 1e3)}};
   }
 }

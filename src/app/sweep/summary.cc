@@ -105,7 +105,8 @@ const std::vector<FigureSpec> kFigures = {
 
 json Totals(const std::vector<json>& rows) {
   json t = {{"scenes", rows.size()}};
-  int ok = 0, boxes = 0, found = 0, within = 0, colour_ok = 0, lifted = 0, truly_lifted = 0;
+  int ok = 0, boxes = 0, found = 0, within = 0, colour_ok = 0, lifted = 0, truly_lifted = 0,
+      falsely_lifted = 0, unconfirmed = 0;
   double wall = 0;
   std::map<std::string, int> failures, statuses;
   json hoover = {{"truth_regions", 0}, {"correct", 0}, {"over", 0},
@@ -134,6 +135,10 @@ json Totals(const std::vector<json>& rows) {
     if (rise.is_number() && asked.is_number() &&
         rise.get<double>() >= kTrueLiftFraction * asked.get<double>()) {
       ++truly_lifted;
+      // In the hand by the truth, but the cameras could not tell (hidden by the forearm, say).
+      if (Get(row, "/lift/lifted") != true) ++unconfirmed;
+    } else if (Get(row, "/lift/lifted") == true) {
+      ++falsely_lifted;  // the task said lifted, the truth says otherwise (or was not read)
     }
   }
   t["ok"] = ok;
@@ -146,6 +151,8 @@ json Totals(const std::vector<json>& rows) {
   t["boxes_color_ok"] = colour_ok;
   t["lifted"] = lifted;
   t["truly_lifted"] = truly_lifted;
+  t["falsely_lifted"] = falsely_lifted;
+  t["truly_lifted_unconfirmed"] = unconfirmed;
   t["hoover"] = hoover;
   t["wall_s"] = wall;
   json figures = json::object();
