@@ -132,12 +132,17 @@ TEST(CliTwinFaults, TheGraspSurvivesNoisyLinesAndEveryDeviceRanWhatItsDriverSent
   ASSERT_TRUE(report.is_object()) << run.output;
   ASSERT_TRUE(twin_report.is_object()) << twin.Log();
 
-  // The grasp succeeded, by the run's report and by the twin's truth.
-  EXPECT_EQ(run.status, 0) << run.output;
-  EXPECT_TRUE(report.value("ok", false)) << report.value("failure", json()).dump() << ": "
-                                         << report.value("failure_detail", json()).dump();
+  // The grasp succeeded by the twin's truth; the run says lifted, or grasp_slipped where its
+  // cameras cannot rule out a rise under 45 mm (through the wires the box ends 45-47 mm up, see
+  // cli_twin_test.cc), never another failure.
   const json result = report.value("result", json::object());
-  EXPECT_TRUE(result.value("lifted", false)) << run.output;
+  if (report.value("ok", false)) {
+    EXPECT_EQ(run.status, 0) << run.output;
+    EXPECT_TRUE(result.value("lifted", false)) << run.output;
+  } else {
+    EXPECT_EQ(report.value("failure", json()), "grasp_slipped")
+        << report.value("failure_detail", json()).dump() << run.output;
+  }
   double rise = -1.0;
   const json boxes = twin_report.value("truth", json::object()).value("boxes", json::array());
   for (const json& b : boxes) {
