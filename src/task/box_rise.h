@@ -21,8 +21,11 @@
 /// Cells of the box's colour are searched from just above the modelled bottom (the table is
 /// named white, as a white box is) to above the top raised by the lift, inside the footprint
 /// grown by footprint_margin_m. The fingers' pads are black and the hand's skin is named orange
-/// (model/colour.h): an orange box may count skin cells, which lie above its bottom; the top
-/// quantile may then read high and rule out too much, never too little.
+/// (model/colour.h): an orange box may count skin cells, which lie above its bottom. The top
+/// quantile then reads high and rules out LOW rises it should not: on held-out seed 9003 an
+/// orange box truly 48.4 mm up was bounded at 51 mm, and an orange box that slid down the
+/// fingers could be called lifted. Not yet fixed (issue 19): the hand's cells must be left out
+/// (the gripper's pose is known from its LEDs) before the top bounds an orange box.
 
 #include <cstdint>
 #include <optional>
