@@ -200,7 +200,8 @@ int Run(const RunOptions& o) {
       {"lift_height", measured ? nlohmann::json(r.box_rise->min_m) : nlohmann::json(nullptr)},
       {"box_rise", rise},
       {"gripper_rise", r.gripper_rise_m},
-      {"lift_corrections", r.lift_corrections}};
+      {"lift_corrections", r.lift_corrections},
+      {"box_relifts", r.box_relifts}};
   report["task"] = {{"lift", config.lift_m}, {"hold_s", config.hold_s}};
   nlohmann::json phases = nlohmann::json::array();
   for (const task::ServoPhase& p : r.servo) {

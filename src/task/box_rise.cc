@@ -1,6 +1,7 @@
 #include "task/box_rise.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -18,11 +19,31 @@ double Quantile(std::vector<double>* v, double q) {
   return (*v)[k];
 }
 
+bool Inside(const grasp::OrientedBox& b, const Eigen::Vector3d& p_W) {
+  const Eigen::Vector3d p = b.R.transpose() * (p_W - b.centre);
+  return (p.cwiseAbs().array() <= 0.5 * b.size.array()).all();
+}
+
 }  // namespace
+
+std::vector<grasp::OrientedBox> HandRegion(const Pose3& X_WE, double opening_m,
+                                           const grasp::HandGeometry& hand,
+                                           const BoxRiseConfig& config) {
+  const std::array<grasp::OrientedBox, 3> parts = grasp::HandBoxes(X_WE, opening_m, hand);
+  std::vector<grasp::OrientedBox> region(parts.begin(), parts.end());
+  // The palm over the wrist: its box grown back along -z of E.
+  region[0].centre -= 0.5 * config.wrist_m * X_WE.linear().col(2);
+  region[0].size.z() += config.wrist_m;
+  for (grasp::OrientedBox& b : region) {
+    b.size += Eigen::Vector3d::Constant(2 * config.hand_margin_m);
+  }
+  return region;
+}
 
 std::optional<BoxHeights> MeasureBoxHeights(const scan::RangeImage& range,
                                             const model::BoxModel& box, int colour_index,
-                                            double lift_m, const BoxRiseConfig& config) {
+                                            double lift_m, const BoxRiseConfig& config,
+                                            std::span<const grasp::OrientedBox> not_box) {
   double bottom = std::numeric_limits<double>::infinity();
   double top = -bottom;
   for (const Eigen::Vector3d& v : box.vertices_W) {
@@ -45,6 +66,10 @@ std::optional<BoxHeights> MeasureBoxHeights(const scan::RangeImage& range,
       const Eigen::Vector3d p_O = X_OW * c.p_W;
       if (std::abs(p_O.x()) > half.x() || std::abs(p_O.y()) > half.y()) continue;
       if (model::ColourIndex(c.rgb) != colour_index) continue;
+      if (std::any_of(not_box.begin(), not_box.end(),
+                      [&](const grasp::OrientedBox& b) { return Inside(b, c.p_W); })) {
+        continue;
+      }
       z.push_back(c.p_W.z());
       if (first_col < 0) first_col = col;
       last_col = col;
@@ -143,7 +168,7 @@ bool SegmentEntersBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
 
 BoxRise MeasureRise(const scan::RangeImage& after, const model::BoxModel& box, int colour_index,
                     const Eigen::Vector3d& camera_W, double lift_m, const BoxRiseConfig& config,
-                    const BoxHeights* before) {
+                    const BoxHeights* before, std::span<const grasp::OrientedBox> hand) {
   BoxRise r;
   double bottom = std::numeric_limits<double>::infinity();
   double top = -bottom;
@@ -151,7 +176,7 @@ BoxRise MeasureRise(const scan::RangeImage& after, const model::BoxModel& box, i
     bottom = std::min(bottom, v.z());
     top = std::max(top, v.z());
   }
-  const std::optional<BoxHeights> seen = MeasureBoxHeights(after, box, colour_index, lift_m, config);
+  const std::optional<BoxHeights> seen = MeasureBoxHeights(after, box, colour_index, lift_m, config, hand);
   if (seen) {
     r.box_cells = seen->cells;
     r.bottom_z = seen->low_z;

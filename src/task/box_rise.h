@@ -20,20 +20,24 @@
 ///
 /// Cells of the box's colour are searched from just above the modelled bottom (the table is
 /// named white, as a white box is) to above the top raised by the lift, inside the footprint
-/// grown by footprint_margin_m. The fingers' pads are black and the hand's skin is named orange
-/// (model/colour.h): an orange box may count skin cells, which lie above its bottom. The top
-/// quantile then reads high and rules out LOW rises it should not: on held-out seed 9003 an
-/// orange box truly 48.4 mm up was bounded at 51 mm, and an orange box that slid down the
-/// fingers could be called lifted. Not yet fixed (issue 19): the hand's cells must be left out
-/// (the gripper's pose is known from its LEDs) before the top bounds an orange box.
+/// grown by footprint_margin_m. The hand holding the box is in that space: its pads are black
+/// and its skin is named orange (model/colour.h), so a black or an orange box would count the
+/// hand's cells as its own. Their top quantile would read high and rule out LOW rises it should
+/// not (held-out seed 9003: an orange box truly 48.4 mm up was bounded at 51 mm; one that slid
+/// down the fingers could have been called lifted). The cells inside the hand's boxes
+/// (HandRegion: the gripper's pose from its LEDs, grown by hand_margin_m) are therefore not
+/// the box's.
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
 #include "common/geometry.h"
+#include "grasp/grasp_planner.h"
 #include "model/box_fit.h"
 #include "robot/calibration.h"
 #include "scan/range_image.h"
@@ -72,7 +76,20 @@ struct BoxRiseConfig {
   /// Rises tried: from -below_m to lift + above_m, in steps of step_m (m).
   double below_m = 0.01;
   double step_m = 0.001;
+  /// The hand's boxes are grown by this on every side before their cells are left out (m):
+  /// the LEDs give the gripper's pose within 1-3 mm, and the skin's cells lie on its faces.
+  double hand_margin_m = 0.008;
+  /// The palm's box is carried this far back along -z of E, over the flange and the wrist,
+  /// which are as close to the box's footprint as the palm is (m).
+  double wrist_m = 0.08;
 };
+
+/// Space whose cells are not the box's: the hand at gripper pose X_WE (W) with its fingers
+/// `opening_m` apart (grasp::HandBoxes), the palm carried back over the wrist by
+/// config.wrist_m, every box grown by config.hand_margin_m.
+std::vector<grasp::OrientedBox> HandRegion(const Pose3& X_WE, double opening_m,
+                                           const grasp::HandGeometry& hand = {},
+                                           const BoxRiseConfig& config = {});
 
 /// The box's cells in one scan.
 struct BoxHeights {
@@ -87,10 +104,12 @@ struct BoxHeights {
 /// (model::ColourIndex), inside its footprint grown by config.footprint_margin_m, and from
 /// table_clearance_m over its modelled bottom to above_m over its modelled top raised by
 /// `lift_m`. A box that did not rise reads its bottom table_clearance_m high.
+/// Cells inside one of the boxes `not_box` are left out (HandRegion).
 /// nullopt when fewer than config.min_cells are; `range.encoder_counts` must be filled.
 std::optional<BoxHeights> MeasureBoxHeights(const scan::RangeImage& range,
                                             const model::BoxModel& box, int colour_index,
-                                            double lift_m, const BoxRiseConfig& config = {});
+                                            double lift_m, const BoxRiseConfig& config = {},
+                                            std::span<const grasp::OrientedBox> not_box = {});
 
 /// The encoder counts at which the laser's plane (at the head's pose X_WH) lights some part of
 /// the box raised anywhere from -config.below_m to lift_m + config.above_m, its footprint grown
@@ -132,8 +151,10 @@ struct BoxRise {
 /// (MeasureBoxHeights with lift 0): a rise is also ruled out when the highest cells now lie
 /// more than top_tolerance_m above the look's raised by it, a bound that does not depend on the
 /// model's top (fitted within a few mm) nor on how well the head's kinematics are known.
+/// `hand` (HandRegion of the gripper's pose after the hold): cells there are not the box's.
 BoxRise MeasureRise(const scan::RangeImage& after, const model::BoxModel& box, int colour_index,
                     const Eigen::Vector3d& camera_W, double lift_m,
-                    const BoxRiseConfig& config = {}, const BoxHeights* before = nullptr);
+                    const BoxRiseConfig& config = {}, const BoxHeights* before = nullptr,
+                    std::span<const grasp::OrientedBox> hand = {});
 
 }  // namespace hgrasp::task

@@ -2,6 +2,8 @@
 // hand.
 #include "app/sweep/summary.h"
 
+#include "app/sweep/scene_row.h"
+
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -31,6 +33,24 @@ TEST(SweepTotals, ALiftTheTruthDeniesIsFalseAndOneTheCamerasMissedIsUnconfirmed)
   EXPECT_EQ(t["falsely_lifted"], 2);
   EXPECT_EQ(t["truly_lifted_unconfirmed"], 1);
   EXPECT_EQ(t["failures"]["grasp_slipped"], 2);
+}
+
+TEST(SweepRow, TheServoRowGivesItsEndAndWhereTheOpenLoopApproachLeftTheGripper) {
+  // A run's report as hgrasp run writes it in simulation, cut to what the servo's row reads.
+  const nlohmann::json report = {
+      {"ok", true},
+      {"truth",
+       {{"run",
+         {{"servo_start", {{"gripper_to_plan_m", 0.0042}, {"gripper_to_plan_deg", 0.6}}},
+          {"grasp_reached", {{"gripper_to_plan_m", 0.0009}, {"gripper_to_plan_deg", 0.2}}}}}}}};
+  ProcessOutcome outcome;
+  outcome.exit_code = 0;
+  const nlohmann::json row =
+      MakeRow({"s", "/tmp/s.yaml"}, "run", outcome, report, "", "scenes/s", {});
+  ASSERT_TRUE(row["servo"].is_object()) << row.dump();
+  EXPECT_NEAR(row["servo"]["gripper_to_plan_mm"].get<double>(), 0.9, 1e-9);
+  EXPECT_NEAR(row["servo"]["open_loop_mm"].get<double>(), 4.2, 1e-9);
+  EXPECT_NEAR(row["servo"]["open_loop_deg"].get<double>(), 0.6, 1e-12);
 }
 
 }  // namespace

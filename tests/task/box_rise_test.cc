@@ -138,6 +138,68 @@ TEST(BoxRise, ABoxThatStayedOrSlidDownTheFingersIsKnownShort) {
   }
 }
 
+// The box raised by `box_dz` and, seen beside it, a patch of cells of the box's colour on the
+// underside of a palm 10 mm over where the gripper put the top (it rose 50 mm): the hand's
+// skin of an orange box, its pads of a black one. TopGrasp's palm spans z 0.16-0.20.
+scan::RangeImage SceneWithPalm(double box_dz) {
+  scan::RangeImage r = Scene(box_dz);
+  scan::RangeImage out(r.rows() + 5, r.cols());
+  out.encoder_counts = r.encoder_counts;
+  for (int col = 0; col < r.cols(); ++col) {
+    for (int row = 0; row < r.rows(); ++row) out.at(row, col) = r.at(row, col);
+    const double y = -0.1 + 0.005 * col;
+    if (std::abs(y) > 0.02 + 1e-9) continue;
+    for (int i = 0; i < 5; ++i) {
+      scan::RangeCell& c = out.at(r.rows() + i, col);
+      c.valid = true;
+      c.p_W = c.p_C = Eigen::Vector3d(0.29 + 0.005 * i, y, 0.161);
+      c.rgb = Seen(kRed);
+    }
+  }
+  return out;
+}
+
+// A grasp from above of StandingBox raised 50 mm, the fingers 60 mm apart: E's z points down,
+// its origin 0.2 m up; the palm spans W z 0.16-0.20 (E z 0-0.04), the pads z 0.06-0.16 at
+// x 0.30 -+ 0.036.
+Pose3 TopGrasp() {
+  Pose3 X_WE = Pose3::Identity();
+  X_WE.linear() = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  X_WE.translation() = Eigen::Vector3d(0.3, 0.0, 0.2);
+  return X_WE;
+}
+
+TEST(BoxRise, TheHandsCellsOfTheBoxsColourAreNotTheBoxs) {
+  const std::vector<grasp::OrientedBox> hand = HandRegion(TopGrasp(), 0.06);
+  for (double dz : {0.05, 0.017}) {
+    // Counted as the box's, the skin reads as its top 61 mm over the model's: every rise under
+    // 57 mm is ruled out, the true one with them.
+    const BoxRise counted = MeasureRise(SceneWithPalm(dz), StandingBox(), kRed, kCamera, 0.05);
+    EXPECT_FALSE(counted.consistent() && counted.min_m <= dz + 1e-9) << dz;
+    const BoxRise r =
+        MeasureRise(SceneWithPalm(dz), StandingBox(), kRed, kCamera, 0.05, {}, nullptr, hand);
+    ExpectInside(r, dz);
+    EXPECT_EQ(r.box_cells, 13 * 49) << dz;
+    if (dz < 0.045) EXPECT_LT(r.max_m, 0.045);
+    if (dz > 0.045) EXPECT_GE(r.min_m, 0.045);
+  }
+}
+
+TEST(BoxRise, TheHandRegionIsTheHandsBoxesGrownAndThePalmCarriedOverTheWrist) {
+  BoxRiseConfig config;
+  const std::vector<grasp::OrientedBox> region = HandRegion(TopGrasp(), 0.06, {}, config);
+  ASSERT_EQ(region.size(), 3u);
+  // The palm, E z 0-0.04, carried back 0.08 m: W z 0.16-0.28, grown 8 mm.
+  EXPECT_NEAR(region[0].centre.z(), 0.22, 1e-12);
+  EXPECT_NEAR(region[0].size.z(), 0.12 + 0.016, 1e-12);
+  EXPECT_NEAR(region[0].size.x(), 0.12 + 0.016, 1e-12);
+  // The pads at x = -+(0.03 + 0.006), E z 0.04-0.14: W z 0.06-0.16.
+  EXPECT_NEAR(region[1].centre.x(), 0.3 - 0.036, 1e-12);
+  EXPECT_NEAR(region[2].centre.x(), 0.3 + 0.036, 1e-12);
+  EXPECT_NEAR(region[1].centre.z(), 0.11, 1e-12);
+  EXPECT_NEAR(region[1].size.y(), 0.02 + 0.016, 1e-12);
+}
+
 TEST(BoxRise, AHiddenBoxIsKnownRisenOnlyPartlyByTheEmptySpaceUnderTheHand) {
   // The arm hides the box itself; the table behind where a slipped box would hang is seen.
   // That rules out the low rises, but not all of those under 45 mm: the camera looks down at

@@ -102,8 +102,12 @@ void AddFigures(const json& report, const std::string& stage, json* row) {
   if (stage == "run") {
     const json run = truth.value("run", json::object());
     if (run.contains("grasp_reached")) {
+      // The servo's end against the plan, and where the open-loop approach had left the gripper
+      // against the pre-grasp (what the servo had to correct).
       r["servo"] = {{"gripper_to_plan_mm", Number(run, "/grasp_reached/gripper_to_plan_m", 1e3)},
-                    {"gripper_to_plan_deg", Number(run, "/grasp_reached/gripper_to_plan_deg")}};
+                    {"gripper_to_plan_deg", Number(run, "/grasp_reached/gripper_to_plan_deg")},
+                    {"open_loop_mm", Number(run, "/servo_start/gripper_to_plan_m", 1e3)},
+                    {"open_loop_deg", Number(run, "/servo_start/gripper_to_plan_deg")}};
     }
     const json rise = Number(run, "/object_rise_m", 1e3);
     const json lifted = report.value("/result/lifted"_json_pointer, json(false));
