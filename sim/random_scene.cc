@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "common/geometry.h"
+#include "sim/draw.h"
 
 namespace hgrasp::sim {
 namespace {
@@ -18,35 +19,6 @@ namespace {
 // options that leave (almost) no room.
 constexpr int kDrawsPerBox = 1000;
 constexpr int kSceneAttempts = 100;
-
-// Uniform draws from mt19937_64 with our own (specified) algorithms: the standard's
-// distributions are implementation-defined, ours give the same numbers with every library.
-class Draw {
- public:
-  explicit Draw(std::uint64_t seed) : rng_(seed) {}
-
-  // Uniform in [0, 1): the top 53 bits of one 64-bit draw.
-  double Unit() { return static_cast<double>(rng_() >> 11) * 0x1.0p-53; }
-
-  // Uniform in [lo, hi).
-  double Real(double lo, double hi) { return lo + (hi - lo) * Unit(); }
-
-  // Uniform integer in [lo, hi], unbiased (draws above the last whole multiple of the range are
-  // rejected).
-  int Int(int lo, int hi) {
-    const std::uint64_t range = static_cast<std::uint64_t>(hi - lo) + 1;
-    const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                                std::numeric_limits<std::uint64_t>::max() % range;
-    std::uint64_t x;
-    do {
-      x = rng_();
-    } while (x >= limit);
-    return lo + static_cast<int>(x % range);
-  }
-
- private:
-  std::mt19937_64 rng_;
-};
 
 using Footprint = std::array<Eigen::Vector2d, 4>;
 

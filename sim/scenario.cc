@@ -102,6 +102,7 @@ class Parser : public yaml::Reader {
   ObjectSpec ParseObject(const YAML::Node& n, const std::string& field, ObjectNodes* nodes) const;
   InterferenceSpec ParseInterference(const YAML::Node& n, const std::string& field) const;
   TaskSpec ParseTask(const YAML::Node& n, const std::string& field, YAML::Node* name_node) const;
+  RobotErrorsSpec ParseRobotErrors(const YAML::Node& n, const std::string& field) const;
   void CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const;
 };
 
@@ -237,6 +238,46 @@ TaskSpec Parser::ParseTask(const YAML::Node& n, const std::string& field,
   return t;
 }
 
+RobotErrorsSpec Parser::ParseRobotErrors(const YAML::Node& n, const std::string& field) const {
+  RobotErrorsSpec r;
+  // Each value, its unit, and a bound far beyond any real robot's (a typo, not a robot).
+  struct Value {
+    const char* key;
+    double* value;
+    double max;
+    const char* what;
+  };
+  const Value values[] = {
+      {"arm_joint_zero_deg", &r.arm_joint_zero_deg, 5.0, "a joint zero std. dev. in deg"},
+      {"arm_link_mm", &r.arm_link_mm, 10.0, "a link offset std. dev. in mm"},
+      {"arm_backlash_deg", &r.arm_backlash_deg, 2.0, "a full backlash in deg"},
+      {"arm_encoder_deg", &r.arm_encoder_deg, 1.0, "an encoder resolution in deg"},
+      {"arm_latency_ms", &r.arm_latency_ms, 500.0, "a command latency in ms"},
+      {"head_encoder_deg", &r.head_encoder_deg, 1.0, "an encoder resolution in deg"},
+      {"head_latency_ms", &r.head_latency_ms, 500.0, "a command latency in ms"},
+      {"head_mount_mm", &r.head_mount_mm, 50.0, "a mounting std. dev. in mm"},
+      {"head_mount_deg", &r.head_mount_deg, 10.0, "a mounting std. dev. in deg"},
+  };
+  Keys keys = {"enabled"};
+  for (const Value& v : values) keys.push_back(v.key);
+  const Entries e = MapOf(n, field, keys,
+                          "a map of robot errors, e.g. {enabled: false} or {arm_joint_zero_deg: "
+                          "0.2}: " + OneOf(keys));
+  if (const YAML::Node* enabled = Find(e, "enabled")) {
+    const std::optional<bool> b = ParseBool(*enabled);
+    if (!b) Fail(*enabled, Join(field, "enabled"), "true or false" + QuoteHint(*enabled));
+    r.enabled = *b;
+  }
+  for (const Value& v : values) {
+    if (const YAML::Node* node = Find(e, v.key)) {
+      const std::string expected = std::string(v.what) + ", 0-" + Fixed(v.max, 0) + " (0: off)";
+      *v.value = Number(*node, Join(field, v.key), expected);
+      if (*v.value < 0.0 || *v.value > v.max) Fail(*node, Join(field, v.key), expected);
+    }
+  }
+  return r;
+}
+
 void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const {
   std::vector<Footprint> footprints;
   for (std::size_t i = 0; i < s.objects.size(); ++i) {
@@ -275,12 +316,12 @@ void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes
 Scenario Parser::Parse(const std::string& text) {
   const std::string top_expected =
       "a map of scenario fields: name, seed, camera_noise, lighting, wall, objects, "
-      "interference, task, devices";
+      "interference, task, robot_errors, devices";
   const YAML::Node root = yaml::LoadDocument(text, path(), top_expected);
   if (!root.IsMap()) Fail(root, "top level", top_expected);
   const Entries e = MapOf(root, "",
                           {"name", "seed", "camera_noise", "lighting", "wall", "objects",
-                           "interference", "task", "devices"},
+                           "interference", "task", "robot_errors", "devices"},
                           top_expected);
 
   Scenario s;
@@ -356,6 +397,10 @@ Scenario Parser::Parse(const std::string& text) {
   YAML::Node target_name_node;
   if (const YAML::Node* task = Find(e, "task")) {
     s.task = ParseTask(*task, "task", &target_name_node);
+  }
+
+  if (const YAML::Node* errors = Find(e, "robot_errors")) {
+    s.robot_errors = ParseRobotErrors(*errors, "robot_errors");
   }
 
   if (const YAML::Node* devices = Find(e, "devices")) s.devices = drivers::ParseDevices(*this, *devices);
@@ -447,6 +492,17 @@ std::string ScenarioYaml(const Scenario& s) {
                                       : "name: " + s.task->target_name)
       << "}\n  lift: " << num(s.task->lift_m) << "\n";
   }
+  const RobotErrorsSpec& r = s.robot_errors;
+  y << "robot_errors:\n  enabled: " << (r.enabled ? "true" : "false") << "\n"
+    << "  arm_joint_zero_deg: " << num(r.arm_joint_zero_deg) << "\n"
+    << "  arm_link_mm: " << num(r.arm_link_mm) << "\n"
+    << "  arm_backlash_deg: " << num(r.arm_backlash_deg) << "\n"
+    << "  arm_encoder_deg: " << num(r.arm_encoder_deg) << "\n"
+    << "  arm_latency_ms: " << num(r.arm_latency_ms) << "\n"
+    << "  head_encoder_deg: " << num(r.head_encoder_deg) << "\n"
+    << "  head_latency_ms: " << num(r.head_latency_ms) << "\n"
+    << "  head_mount_mm: " << num(r.head_mount_mm) << "\n"
+    << "  head_mount_deg: " << num(r.head_mount_deg) << "\n";
   y << "devices: {}\n";
   return y.str();
 }

@@ -91,6 +91,42 @@ struct TaskSpec {
   double lift_m = 0.05;      ///< m, > 0 and <= kMaxLift
 };
 
+/// How far the twin's robot differs from its nominal model (models/humanoid.xml and .urdf,
+/// which the pipeline reads): the scenario block robot_errors. The values of one robot are
+/// drawn from these from the scenario's seed (sim/robot_errors.h); every value is >= 0, and 0
+/// switches that error off. The defaults are a real, carefully assembled robot's:
+struct RobotErrorsSpec {
+  bool enabled = true;  ///< false: the robot is exactly its model (every value below ignored)
+  /// Std. dev. of each Puma joint's zero: the encoder's index pulse against the link's
+  /// kinematic zero. The Puma 260 finds its zero at power-up from potentiometers and the
+  /// encoders' index pulses, set at assembly; kinematic calibrations of Pumas find joint offsets
+  /// of 0.02-0.3 deg. 0.1 deg puts the gripper 1-3 mm off at the table.
+  double arm_joint_zero_deg = 0.1;
+  /// Std. dev. of each coordinate of each Puma link's offset from its parent (the DH lengths
+  /// and the joint axes' positions): machined parts and their assembly, 0.1-0.5 mm.
+  double arm_link_mm = 0.25;
+  /// Full backlash of each Puma joint's gear train after adjustment: the link lags its motor
+  /// (whose encoder the controller reads) by half of it in the direction of the last move.
+  double arm_backlash_deg = 0.03;
+  /// The Puma joints' encoder resolution at the joint: incremental encoders on the motor,
+  /// 1000 counts a motor turn through gear ratios of 50-100 (joint readings in steps of it).
+  double arm_encoder_deg = 0.005;
+  /// From a command to the arm's first motion: VAL II plans each move at its next 28 ms
+  /// trajectory tick.
+  double arm_latency_ms = 28.0;
+  /// The Biclops joints' encoder resolution: 12000 counts a joint turn (0.03 deg a count).
+  double head_encoder_deg = 0.03;
+  /// From a command to the head's first motion: the PMD chips' trajectory generators start on
+  /// their next cycle (a few ms; a command's bytes on the 19200 baud line are the driver's).
+  double head_latency_ms = 5.0;
+  /// Std. dev. of each coordinate of the head's mounting on the torso (mm) and of each angle of
+  /// it (deg). The servo needs no camera-to-arm calibration, so this error is the paper's
+  /// point; it is off by default until the report's truth is taken in the W the pipeline
+  /// believes (a mounting error moves every modelled box in W, which is not perception's).
+  double head_mount_mm = 0.0;
+  double head_mount_deg = 0.0;
+};
+
 /// A parsed and checked scenario file.
 struct Scenario {
   std::string path;              ///< the file it came from (as given to LoadScenario)
@@ -102,6 +138,7 @@ struct Scenario {
   std::vector<ObjectSpec> objects;
   std::vector<InterferenceSpec> interference;
   std::optional<TaskSpec> task;
+  RobotErrorsSpec robot_errors;  ///< robot_errors: {...}; absent: the defaults
   /// Each device's backend (drivers/config/device_config.h); a device not listed is simulated.
   drivers::DevicesConfig devices;
 };

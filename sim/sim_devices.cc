@@ -35,7 +35,7 @@ class SimArm final : public device::Arm {
     const mjData* d = world_->data();
     state->t_s = d->time;
     for (int i = 0; i < 6; ++i) {
-      state->q[i] = d->qpos[m->jnt_qposadr[joint_[i]]];
+      state->q[i] = world_->EncoderReading(actuator_[i]);
       state->qd[i] = d->qvel[m->jnt_dofadr[joint_[i]]];
     }
     state->moving = world_->Moving(actuator_);
@@ -53,9 +53,10 @@ class SimArm final : public device::Arm {
   }
 
   Status MoveRelative(const Pose3& X_EEnew) override {
-    // The controller's own inverse kinematics, from the set-point it holds now.
+    // The controller's own (nominal) inverse kinematics, from the set-point it holds now as
+    // its encoders count it.
     Joint6 q_now;
-    for (int i = 0; i < 6; ++i) q_now[i] = world_->data()->ctrl[actuator_[i]];
+    for (int i = 0; i < 6; ++i) q_now[i] = world_->EncoderSetpoint(actuator_[i]);
     const Pose3 X_WE = ArmForwardKinematics(*world_, side_, q_now);
     const auto q = ArmInverseKinematics(*world_, side_, X_WE * X_EEnew, q_now);
     if (!q) return Status::kRejected;
@@ -158,9 +159,11 @@ class SimHead final : public device::Head {
     return Status::kOk;
   }
 
+  /// As the head's encoders read them.
   static device::HeadJoints Joints(const World* world) {
-    return {world->JointPosition("head_pan"), world->JointPosition("head_tilt"),
-            world->JointPosition("head_verge_left")};
+    return {world->EncoderReading(world->Id(mjOBJ_ACTUATOR, "head_pan")),
+            world->EncoderReading(world->Id(mjOBJ_ACTUATOR, "head_tilt")),
+            world->EncoderReading(world->Id(mjOBJ_ACTUATOR, "head_verge_left"))};
   }
 
  private:
@@ -288,7 +291,7 @@ Pose3 GripperPose(const mjData* d, int body) {
 }  // namespace
 
 Pose3 ArmForwardKinematics(const World& world, Side side, const Joint6& q) {
-  const mjModel* m = world.model();
+  const mjModel* m = world.nominal_model();
   const ArmChain chain = Chain(world, side);
   mjData* scratch = mj_makeData(m);
   mju_copy(scratch->qpos, world.data()->qpos, m->nq);
@@ -303,7 +306,7 @@ std::optional<Joint6> ArmInverseKinematics(const World& world, Side side, const 
                                            const Joint6& q_start) {
   // Damped least squares on the gripper's Jacobian (MuJoCo's), as a Puma controller solves
   // its tool moves: local, from the configuration it holds.
-  const mjModel* m = world.model();
+  const mjModel* m = world.nominal_model();
   const ArmChain chain = Chain(world, side);
   mjData* scratch = mj_makeData(m);
   mju_copy(scratch->qpos, world.data()->qpos, m->nq);

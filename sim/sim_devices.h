@@ -33,7 +33,8 @@ class SimRobot {
 device::RobotDevices MakeSimDevices(World* world, StereoRig* rig);
 
 /// Pose X_WE of arm `side`'s gripper frame with the arm at joint angles `q` (the rest of the
-/// robot as it is now), from the simulator's model: what the simulated Puma controller knows.
+/// robot as it is now), from the simulator's nominal model (World::nominal_model): what the
+/// simulated Puma controller knows, not where the arm truly is.
 Pose3 ArmForwardKinematics(const World& world, device::Side side, const device::Joint6& q);
 
 /// Joint angles that put arm `side`'s gripper frame at X_WE, found by damped least squares from

@@ -118,7 +118,9 @@ double Trapezoid(double t, double duration) {
 
 }  // namespace
 
-World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::move(scenario)) {
+World::World(Scenario scenario, const WorldOptions& options)
+    : scenario_(std::move(scenario)),
+      errors_(DrawRobotErrors(scenario_.robot_errors, scenario_.seed)) {
   const std::string& model_path = options.model_path;
   const std::string path = ResolveDataPath(model_path);
   std::string xml = ReadFile(path);
@@ -154,7 +156,14 @@ World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::mo
   model_ = LoadFromString(xml, "scene.xml");
   model_->vis.headlight.ambient[0] = model_->vis.headlight.ambient[1] =
       model_->vis.headlight.ambient[2] = static_cast<float>(scenario_.ambient);
-  if (!options.head_mount_error.isApprox(Pose3::Identity(), 0.0)) {
+  nominal_model_ = mj_copyModel(nullptr, model_);
+  // The true robot: each link where robot_errors put it in its parent.
+  for (const auto& [body, offset] : errors_.body_offsets) {
+    mjtNum* pos = model_->body_pos + 3 * Id(mjOBJ_BODY, body);
+    for (int i = 0; i < 3; ++i) pos[i] += offset[i];
+  }
+  const Pose3 head_mount = options.head_mount_error * errors_.head_mount;
+  if (!head_mount.isApprox(Pose3::Identity(), 0.0)) {
     // X_PT = X_PM * X_MT: the head's body frame in its parent (the torso), displaced.
     const int head = Id(mjOBJ_BODY, "head_pan_link");
     mjtNum* pos = model_->body_pos + 3 * head;
@@ -162,7 +171,7 @@ World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::mo
     Pose3 X_PM = Pose3::Identity();
     X_PM.translation() = Eigen::Vector3d(pos[0], pos[1], pos[2]);
     X_PM.linear() = Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]).toRotationMatrix();
-    const Pose3 X_PT = X_PM * options.head_mount_error;
+    const Pose3 X_PT = X_PM * head_mount;
     const Eigen::Quaterniond q(X_PT.linear());
     for (int i = 0; i < 3; ++i) pos[i] = X_PT.translation()[i];
     quat[0] = q.w(), quat[1] = q.x(), quat[2] = q.y(), quat[3] = q.z();
@@ -184,6 +193,20 @@ World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::mo
       ResolveDataPath(std::filesystem::path(model_path).replace_extension(".urdf").string()));
   speed_limit_.assign(model_->nu, 0.0);
   motion_.assign(model_->nu, Motion{});
+  joint_error_.assign(model_->nu, JointError{});
+  dir_.assign(model_->nu, 0);
+  for (const auto& [name, e] : errors_.joints) joint_error_[Id(mjOBJ_ACTUATOR, name)] = e;
+  // At home each joint stands at the whole encoder count nearest the keyframe's angle (the
+  // controllers servo to counts): its encoder reads the count, the link stands off it by the
+  // zero error.
+  for (int a = 0; a < model_->nu; ++a) {
+    const JointError& e = joint_error_[a];
+    if (e.resolution_rad <= 0) continue;
+    const double count =
+        e.resolution_rad * std::round((data_->ctrl[a] - e.zero_rad) / e.resolution_rad);
+    data_->ctrl[a] = LinkAngle(a, count);
+    data_->qpos[model_->jnt_qposadr[model_->actuator_trnid[2 * a]]] = data_->ctrl[a];
+  }
   for (int a = 0; a < model_->nu; ++a) {
     const int joint = model_->actuator_trnid[2 * a];
     speed_limit_[a] = tree.Limits(mj_id2name(model_, mjOBJ_JOINT, joint)).velocity;
@@ -202,6 +225,25 @@ World::World(Scenario scenario, const WorldOptions& options) : scenario_(std::mo
 World::~World() {
   mj_deleteData(data_);
   mj_deleteModel(model_);
+  mj_deleteModel(nominal_model_);
+}
+
+double World::LinkAngle(int a, double encoder) const {
+  const JointError& e = joint_error_[a];
+  return encoder + e.zero_rad - 0.5 * dir_[a] * e.backlash_rad;
+}
+
+double World::EncoderSetpoint(int a) const {
+  const JointError& e = joint_error_[a];
+  return data_->ctrl[a] - e.zero_rad + 0.5 * dir_[a] * e.backlash_rad;
+}
+
+double World::EncoderReading(int a) const {
+  const JointError& e = joint_error_[a];
+  const int joint = model_->actuator_trnid[2 * a];
+  const double raw =
+      data_->qpos[model_->jnt_qposadr[joint]] - e.zero_rad + 0.5 * dir_[a] * e.backlash_rad;
+  return e.resolution_rad > 0 ? e.resolution_rad * std::round(raw / e.resolution_rad) : raw;
 }
 
 int World::Id(mjtObj type, const std::string& name) const {
@@ -218,11 +260,21 @@ double World::JointPosition(const std::string& joint) const {
 void World::StartMotion(const std::vector<int>& actuators, const std::vector<double>& goal,
                         const std::vector<double>& speed_limit, bool constant_speed) {
   HGRASP_DEMAND(actuators.size() == goal.size() && goal.size() == speed_limit.size());
-  double duration = 0.0;
+  double duration = 0.0, latency = 0.0;
+  std::vector<double> link_goal(goal.size());
   for (size_t i = 0; i < actuators.size(); ++i) {
     const int a = actuators[i];
     HGRASP_DEMAND(speed_limit[i] > 0);
-    const double distance = std::abs(goal[i] - data_->ctrl[a]);
+    // The controller servos its motor to a whole encoder count: at rest the encoder reads the
+    // goal, and the link stands where its zero and the backlash put it.
+    const double res = joint_error_[a].resolution_rad;
+    const double count_goal = res > 0 ? res * std::round(goal[i] / res) : goal[i];
+    // The gear's backlash is taken up in the direction the motor now turns.
+    const double delta = count_goal - EncoderSetpoint(a);
+    if (std::abs(delta) > 1e-12) dir_[a] = delta > 0 ? 1 : -1;
+    link_goal[i] = LinkAngle(a, count_goal);
+    latency = std::max(latency, joint_error_[a].latency_s);
+    const double distance = std::abs(link_goal[i] - data_->ctrl[a]);
     // The cubic profile peaks at 1.5 times the mean speed.
     duration = std::max(duration, (constant_speed ? 1.0 : 1.5) * distance / speed_limit[i]);
   }
@@ -230,8 +282,8 @@ void World::StartMotion(const std::vector<int>& actuators, const std::vector<dou
   for (size_t i = 0; i < actuators.size(); ++i) {
     Motion& m = motion_[actuators[i]];
     m.start = data_->ctrl[actuators[i]];
-    m.goal = goal[i];
-    m.t0 = data_->time;
+    m.goal = link_goal[i];
+    m.t0 = data_->time + latency;
     m.duration = duration;
     m.active = true;
     m.constant_speed = constant_speed;

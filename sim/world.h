@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/geometry.h"
+#include "sim/robot_errors.h"
 #include "sim/scenario.h"
 
 namespace hgrasp::sim {
@@ -42,7 +43,8 @@ struct WorldOptions {
   /// Where the head is really mounted on the torso relative to the model (and to the URDF the
   /// pipeline's kinematics read): X_MT, the true mounting T of the head (body head_pan_link, with
   /// its cameras and laser) in the modelled mounting M. Identity: as modelled. Tests displace it
-  /// to show that the visual servo needs no camera-to-arm calibration.
+  /// to show that the visual servo needs no camera-to-arm calibration. Composed with the
+  /// scenario's robot_errors mounting (head_mount_error first).
   Pose3 head_mount_error = Pose3::Identity();
 };
 
@@ -56,7 +58,13 @@ class World {
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
+  /// The true robot: the model with the links moved by robot_errors.
   const mjModel* model() const { return model_; }
+  /// The robot as built to its drawings (models/humanoid.xml, as the URDF the pipeline reads):
+  /// what the simulated controllers' kinematics know. Same structure as model().
+  const mjModel* nominal_model() const { return nominal_model_; }
+  /// The errors this robot was built with (sim/robot_errors.h).
+  const RobotErrors& robot_errors() const { return errors_; }
   mjModel* mutable_model() { return model_; }
   const mjData* data() const { return data_; }
   mjData* data() { return data_; }
@@ -69,8 +77,9 @@ class World {
   /// std::runtime_error if the simulation diverges (NaN or huge state or control).
   void Step(double duration_s);
 
-  /// Starts a synchronised move of `actuators` to `goal` (joint units): every joint arrives
-  /// together. Smooth moves follow a cubic profile whose peak speed stays within `speed_limit`
+  /// Starts a synchronised move of `actuators` to `goal` (joint units, as the joints' encoders
+  /// read: the link goes where robot_errors put it for that reading; the motion starts after
+  /// the joints' command latency): every joint arrives together. Smooth moves follow a cubic profile whose peak speed stays within `speed_limit`
   /// of every joint; constant-speed moves (the laser motor) ramp up over 40 ms, run at
   /// `speed_limit`, and ramp down over 40 ms.
   void StartMotion(const std::vector<int>& actuators, const std::vector<double>& goal,
@@ -79,6 +88,11 @@ class World {
   bool Moving(const std::vector<int>& actuators) const;
   /// Ends the motion of `actuators` where their set-points are now.
   void StopMotion(const std::vector<int>& actuators);
+  /// What the encoder of the joint driven by `actuator` reads now: the link's angle less its
+  /// zero error, the backlash taken up in the last move's direction, in whole encoder steps.
+  double EncoderReading(int actuator) const;
+  /// The set-point of `actuator` now, as its encoder would read it there.
+  double EncoderSetpoint(int actuator) const;
 
   /// Id of a named model element; std::runtime_error when the model lacks it.
   int Id(mjtObj type, const std::string& name) const;
@@ -124,7 +138,14 @@ class World {
   /// Sets each LED geom's material from its switch and the hiding window.
   void ApplyLeds();
 
+  // The link angle for an encoder reading, the backlash taken up in direction dir_[a].
+  double LinkAngle(int actuator, double encoder) const;
+
   Scenario scenario_;
+  RobotErrors errors_;
+  std::vector<JointError> joint_error_;  // per actuator
+  std::vector<int> dir_;                 // per actuator: the last move's direction (-1, 0, 1)
+  mjModel* nominal_model_ = nullptr;
   mjModel* model_ = nullptr;
   mjData* data_ = nullptr;
   std::vector<SimObject> objects_;

@@ -28,7 +28,7 @@ TwinArmModel::TwinArmModel(World* world, device::Side side) : world_(world) {
 
 device::Joint6 TwinArmModel::q() const {
   device::Joint6 q;
-  for (int i = 0; i < 6; ++i) q[i] = world_->data()->qpos[qpos_[i]];
+  for (int i = 0; i < 6; ++i) q[i] = world_->EncoderReading(actuator_[i]);
   return q;
 }
 

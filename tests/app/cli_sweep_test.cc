@@ -244,15 +244,17 @@ TEST(CliSweep, ABaselineCatchesAFigureMadeWorseOnPurpose) {
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("0 regressions"), std::string::npos) << r.output;
 
-  // The laser's calibration off by 0.2 mm (its plane's offset): the stereo validation, which
-  // holds each point against the plane, loses points on the blue box's side face, and its yaw
-  // gets worse by more than the tolerance (0.76 -> 3.13 deg; 0.4 mm off and no box is fitted).
+  // The laser's calibration off by 0.3 mm (its plane's offset): the stereo validation, which
+  // holds each point against the plane, loses points, and the figures get worse by more than
+  // their tolerances. On the nominal robot 0.2 mm turned the blue box's yaw 0.76 -> 3.13 deg;
+  // on the default robot (its errors on) 0.2 mm stayed within the tolerances and 0.3 mm loses
+  // the range's coverage (0.99 -> 0.92) and every box.
   std::ifstream in(Root() + "/calibration/sim/laser.yaml");
   std::string laser((std::istreambuf_iterator<char>(in)), {});
   const std::regex offset("offset_m: (-?[0-9.e-]+)");
   std::smatch m;
   ASSERT_TRUE(std::regex_search(laser, m, offset));
-  const double worse = std::stod(m[1]) + 0.0002;
+  const double worse = std::stod(m[1]) + 0.0003;
   laser = std::regex_replace(laser, offset, "offset_m: " + std::to_string(worse));
   const fs::path bad_laser = dir / "laser_off.yaml";
   Write(bad_laser, laser);
@@ -260,7 +262,7 @@ TEST(CliSweep, ABaselineCatchesAFigureMadeWorseOnPurpose) {
                     (dir / "worse").string() + " --baseline " + baseline.string(),
                 120);
   EXPECT_EQ(r.status, 1) << r.output;
-  EXPECT_NE(r.output.find("REGRESSION default: boxes.worst_yaw_deg"), std::string::npos)
+  EXPECT_NE(r.output.find("REGRESSION default: "), std::string::npos)
       << r.output;
   const json regressions = Read(dir / "worse" / "regressions.json");
   ASSERT_GE(regressions["regressions"].size(), 1u);

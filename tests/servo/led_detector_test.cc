@@ -187,10 +187,12 @@ TEST_F(SimLeds, TriangulatedLedsMatchGroundTruth) {
       std::printf("  LED %d: %zu/%zu blobs, %zu points, %d pixels, nearest %.2f mm\n", i,
                   left.size(), right.size(), points.size(), pixels, 1e3 * best);
       EXPECT_LE(points.size(), 1u) << "LED " << i << ": a false match";
-      if (!in_both) continue;
+      // A partly hidden LED may be missed: its blob's centroid is off its centre in each image
+      // differently, and the rows no longer match (a 3-pixel sliver, on the robot with its
+      // errors, seen in both and matched in neither). The tracker drops such LEDs too.
+      if (!in_both || !whole) continue;
       ++seen;
       if (best < 0.02) ++found;
-      if (!whole) continue;
       worst = std::max(worst, best);
       sum_sq += best * best;
       ++n;

@@ -77,6 +77,25 @@ TEST(ScenarioTest, MinimalTakesDefaults) {
   EXPECT_TRUE(s.devices.entries.empty());
 }
 
+TEST(ScenarioTest, RobotErrorsTakeTheRealRobotsDefaultsAndEachCanBeSet) {
+  const Scenario d = ParseScenario("name: t\n", "t.yaml");
+  EXPECT_TRUE(d.robot_errors.enabled);
+  EXPECT_EQ(d.robot_errors.arm_joint_zero_deg, 0.1);
+  EXPECT_EQ(d.robot_errors.head_encoder_deg, 0.03);
+  const Scenario s = ParseScenario(
+      "name: t\nrobot_errors:\n  arm_joint_zero_deg: 0.2\n  arm_link_mm: 0\n"
+      "  head_mount_mm: 2\n  arm_latency_ms: 40\n",
+      "t.yaml");
+  EXPECT_TRUE(s.robot_errors.enabled);
+  EXPECT_EQ(s.robot_errors.arm_joint_zero_deg, 0.2);
+  EXPECT_EQ(s.robot_errors.arm_link_mm, 0.0);
+  EXPECT_EQ(s.robot_errors.head_mount_mm, 2.0);
+  EXPECT_EQ(s.robot_errors.arm_latency_ms, 40.0);
+  EXPECT_EQ(s.robot_errors.arm_backlash_deg, 0.03);  // not given: the default
+  EXPECT_FALSE(ParseScenario("name: t\nrobot_errors: {enabled: false}\n", "t.yaml")
+                   .robot_errors.enabled);
+}
+
 TEST(ScenarioTest, FullBlockStyleValues) {
   const Scenario s = LoadScenario(kFixtures + "good_full.yaml");
   EXPECT_EQ(s.name, "full");
@@ -407,6 +426,12 @@ TEST(ScenarioTest, MoreBadValues) {
       {"name: t\nwall: {x: 0.4}\n", "wall.x"},
       {"name: t\nwall: {}\n", "wall.x"},
       {"name: t\nwall: 0.9\n", "wall"},
+      {"name: t\nrobot_errors: off\n", "robot_errors"},
+      {"name: t\nrobot_errors: {enabled: maybe}\n", "robot_errors.enabled"},
+      {"name: t\nrobot_errors: {arm_joint_zero_deg: -0.1}\n", "robot_errors.arm_joint_zero_deg"},
+      {"name: t\nrobot_errors: {arm_link_mm: 11}\n", "robot_errors.arm_link_mm"},
+      {"name: t\nrobot_errors: {head_latency_ms: .nan}\n", "robot_errors.head_latency_ms"},
+      {"name: t\nrobot_errors: {arm_zero_deg: 0.1}\n", "robot_errors.arm_zero_deg"},
       {OneBox("[0, 0.05, 0.05]"), "objects[0].size"},
       {OneBox("[0.005, 0.05, 0.05]"), "objects[0].size"},
       {OneBox("[0.05, 0.05]"), "objects[0].size"},

@@ -45,6 +45,17 @@ void ExpectSame(const Scenario& a, const Scenario& b) {
     EXPECT_EQ(a.task->target_name, b.task->target_name);
     EXPECT_EQ(a.task->lift_m, b.task->lift_m);
   }
+  const RobotErrorsSpec &r = a.robot_errors, &q = b.robot_errors;
+  EXPECT_EQ(r.enabled, q.enabled);
+  EXPECT_EQ(r.arm_joint_zero_deg, q.arm_joint_zero_deg);
+  EXPECT_EQ(r.arm_link_mm, q.arm_link_mm);
+  EXPECT_EQ(r.arm_backlash_deg, q.arm_backlash_deg);
+  EXPECT_EQ(r.arm_encoder_deg, q.arm_encoder_deg);
+  EXPECT_EQ(r.arm_latency_ms, q.arm_latency_ms);
+  EXPECT_EQ(r.head_encoder_deg, q.head_encoder_deg);
+  EXPECT_EQ(r.head_latency_ms, q.head_latency_ms);
+  EXPECT_EQ(r.head_mount_mm, q.head_mount_mm);
+  EXPECT_EQ(r.head_mount_deg, q.head_mount_deg);
   EXPECT_TRUE(b.devices.entries.empty());
 }
 
