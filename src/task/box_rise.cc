@@ -230,4 +230,13 @@ BoxRise MeasureRise(const scan::RangeImage& after, const model::BoxModel& box, i
   return r;
 }
 
+double RiseShortfall(const BoxRise& rise, double lift_m, double min_rise_m, double tolerance_m,
+                     double max_step_m, int min_cells) {
+  if (!rise.consistent() || rise.box_cells < min_cells) return 0.0;
+  const double short_m =
+      std::max(lift_m - 0.5 * (rise.min_m + rise.max_m), min_rise_m - rise.min_m);
+  if (short_m <= tolerance_m) return 0.0;
+  return std::min(short_m, max_step_m);
+}
+
 }  // namespace hgrasp::task

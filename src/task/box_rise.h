@@ -146,6 +146,16 @@ struct BoxRise {
   bool consistent() const { return left > 0; }
 };
 
+/// How far to raise a box the rise scan saw in the hand (m; 0: not at all): by what the middle
+/// of its rises lacks of `lift_m`, or by what their low end lacks of `min_rise_m` (the least
+/// rise the verdict accepts), whichever is more, when that is more than `tolerance_m`; never
+/// more than `max_step_m`. Nothing for a rise the scan did not see (fewer than `min_cells` of
+/// the box's cells) or found inconsistent (the box tipped or moved): raising that proves nothing.
+/// A box truly up but seen with wide bounds ends a few mm higher; one truly short rises to the
+/// lift; one not in the hand stays where it is, and the scan after says so.
+double RiseShortfall(const BoxRise& rise, double lift_m, double min_rise_m, double tolerance_m,
+                     double max_step_m, int min_cells);
+
 /// Tries every rise against the rise scan `after` (its cells in W), with the left camera's
 /// centre at `camera_W` during that scan. `before`, when given, is the box's cells in the look
 /// (MeasureBoxHeights with lift 0): a rise is also ruled out when the highest cells now lie

@@ -586,19 +586,16 @@ bool GraspTask::Lift() {
   }
   // The box itself, as the cameras see it now: the gripper may have risen without it.
   if (!ScanRise(hand.opening_m)) return false;
-  // Seen in the hand but short of the lift (the middle of the rises that fit under it by more
-  // than relift_tolerance_m): it slid a little in the fingers, or the arm sags under it
-  // (through the twin's wires the box ended 44.5-47 mm up of 50, and a bound of 45 mm on a box
-  // that ended 44.5 mm up is no lift to trust). Raised by what it lacks and scanned again.
-  for (int k = 0; k < config_.max_box_relifts; ++k) {
-    const BoxRise& r = *result_.box_rise;
-    if (!r.consistent() || r.box_cells < config_.rise.min_cells ||
-        0.5 * (r.min_m + r.max_m) >= config_.lift_m - config_.relift_tolerance_m ||
-        !tracker_->tracking()) {
-      break;
-    }
+  // Seen in the hand but short of the lift, or seen too vaguely to rule out a short rise: it
+  // slid a little in the fingers, or the arm sags under it (through the twin's wires the box
+  // ended 44-47 mm up of 50, and a bound of 45 mm on a box that ended 44.5 mm up is no lift to
+  // trust). Raised by what it lacks (RiseShortfall) and scanned again.
+  for (int k = 0; k < config_.max_box_relifts && tracker_->tracking(); ++k) {
     const double short_m =
-        std::min(config_.lift_m - 0.5 * (r.min_m + r.max_m), config_.law.max_translation_step);
+        RiseShortfall(*result_.box_rise, config_.lift_m, config_.min_rise_fraction * config_.lift_m,
+                      config_.relift_tolerance_m, config_.law.max_translation_step,
+                      config_.rise.min_cells);
+    if (short_m <= 0.0) break;
     const Pose3 X_WE_now = model_.head.X_WC(kCL, last_frame_.head) * tracker_->pose();
     Pose3 step = Pose3::Identity();
     step.translation() = X_WE_now.linear().transpose() * Eigen::Vector3d(0, 0, short_m);

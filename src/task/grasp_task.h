@@ -117,9 +117,10 @@ struct TaskConfig {
   int max_lift_corrections = 2;
   double min_rise_fraction = 0.9;
   /// A box the rise scan sees in the hand (min_cells of it) but short of the lift (the middle
-  /// of the rises that fit under lift_m by more than relift_tolerance_m) is raised by what it
-  /// lacks (at most a servo step) and scanned again, this many times at most. In simulation
-  /// the box ends 48-49 mm up of 50 and its rises' middle near 50 mm: it is seldom raised.
+  /// of the rises that fit under lift_m by more than relift_tolerance_m, or their low end under
+  /// min_rise_fraction of it) is raised by what it lacks (at most a servo step; RiseShortfall)
+  /// and scanned again, this many times at most. In simulation the box ends 48-49 mm up of 50
+  /// and its rises' middle near 50 mm: it is seldom raised.
   int max_box_relifts = 1;
   double relift_tolerance_m = 0.002;
   /// The grasp holds while the fingers stay at least this far apart (m): closed to less, they

@@ -487,17 +487,20 @@ TEST(ModelGripTest, HandHoldsABoxAgainstGravity) {
            (Vector3d(d->qpos + box_q) - Vector3d(d->xpos + 3 * grip));
   };
   Vector3d p_EBox_held = Vector3d::Zero();
-  for (int step = 1; step <= 750; ++step) {  // 1.5 s
+  // 0.5 s to close, then held 30 s: a run through the twin's wires holds the box 60 s and more
+  // (its serial lines take their baud rate's time), and soft contacts creep.
+  for (int step = 1; step <= 15250; ++step) {
     mj_step1(m.get(), d.get());
     for (int i = 0; i < robot_nv; ++i) d->qfrc_applied[i] = d->qfrc_bias[i];
     mj_step2(m.get(), d.get());
     if (step == 250) p_EBox_held = p_EBox();  // 0.5 s: closed
   }
   for (int i = 0; i < mjNWARNING; ++i) EXPECT_EQ(d->warning[i].number, 0) << "warning " << i;
-  // It drops a little while the fingers close, then stays put in the hand.
+  // It drops a little while the fingers close, then stays put in the hand (it crept 0.09 mm/s
+  // without the noslip solver: 2.7 mm in 30 s).
   const Vector3d p_WBoxNow(d->qpos + box_q);
   EXPECT_LT((p_WBoxNow - p_WBox).norm(), 0.005) << "the box fell: " << p_WBoxNow.transpose();
-  EXPECT_LT((p_EBox() - p_EBox_held).norm(), 5e-4) << "the box slipped in the hand";
+  EXPECT_LT((p_EBox() - p_EBox_held).norm(), 1e-4) << "the box slipped in the hand";
   EXPECT_NEAR(qpos("left_thumb_slide") + qpos("left_index_slide"), 0.06, 0.002);
   EXPECT_NEAR(qpos("left_thumb_slide"), qpos("left_index_slide"), 5e-4) << "coupling too soft";
   EXPECT_GT(std::abs(d->actuator_force[hand]), 35.0) << "grip force near its 40 N limit";

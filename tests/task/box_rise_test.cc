@@ -180,8 +180,12 @@ TEST(BoxRise, TheHandsCellsOfTheBoxsColourAreNotTheBoxs) {
         MeasureRise(SceneWithPalm(dz), StandingBox(), kRed, kCamera, 0.05, {}, nullptr, hand);
     ExpectInside(r, dz);
     EXPECT_EQ(r.box_cells, 13 * 49) << dz;
-    if (dz < 0.045) EXPECT_LT(r.max_m, 0.045);
-    if (dz > 0.045) EXPECT_GE(r.min_m, 0.045);
+    if (dz < 0.045) {
+      EXPECT_LT(r.max_m, 0.045);
+    }
+    if (dz > 0.045) {
+      EXPECT_GE(r.min_m, 0.045);
+    }
   }
 }
 
@@ -236,6 +240,31 @@ TEST(BoxRise, ABoxSeenWhereNoRaisedBoxFitsIsInconsistent) {
   }
   const BoxRise r = MeasureRise(aside, StandingBox(), kRed, kCamera, 0.05);
   EXPECT_FALSE(r.consistent());
+}
+
+// The raise for a box seen short, worked by hand: lift 50 mm, least rise 45 mm, tolerance 2 mm,
+// servo step 20 mm, 30 cells needed.
+TEST(BoxRise, ABoxSeenShortOrTooVaguelyIsRaisedByWhatItLacks) {
+  auto rise = [](double min_mm, double max_mm, int cells) {
+    BoxRise r;
+    r.min_m = 1e-3 * min_mm;
+    r.max_m = 1e-3 * max_mm;
+    r.left = r.min_m <= r.max_m ? 1 : 0;
+    r.box_cells = cells;
+    return r;
+  };
+  auto shortfall = [](const BoxRise& r) {
+    return 1e3 * RiseShortfall(r, 0.05, 0.045, 0.002, 0.02, 30);
+  };
+  EXPECT_NEAR(shortfall(rise(48, 52, 100)), 0.0, 1e-9);  // middle 50: up
+  EXPECT_NEAR(shortfall(rise(46, 51, 100)), 0.0, 1e-9);  // middle 48.5: within 2 mm
+  EXPECT_NEAR(shortfall(rise(40, 44, 100)), 8.0, 1e-9);  // middle 42: 8 mm short
+  // The middle near the lift but the low end under 45 mm (the twin's 44 mm box was seen so):
+  // raised by what the low end lacks.
+  EXPECT_NEAR(shortfall(rise(41, 57, 100)), 4.0, 1e-9);
+  EXPECT_NEAR(shortfall(rise(0, 40, 100)), 20.0, 1e-9);  // 30 mm short: one servo step
+  EXPECT_NEAR(shortfall(rise(40, 44, 29)), 0.0, 1e-9);   // too few of its cells seen
+  EXPECT_NEAR(shortfall(rise(44, 40, 100)), 0.0, 1e-9);  // inconsistent: it tipped or moved
 }
 
 TEST(BoxRise, TheRiseScanCoversTheCountsGivenAtTheLooksSpacingInsideTheLooksSweep) {
