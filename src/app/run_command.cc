@@ -205,10 +205,13 @@ int Run(const RunOptions& o) {
   report["task"] = {{"lift", config.lift_m}, {"hold_s", config.hold_s}};
   nlohmann::json phases = nlohmann::json::array();
   for (const task::ServoPhase& p : r.servo) {
+    nlohmann::json errors = nlohmann::json::array();
+    for (const servo::ServoError& e : p.errors) errors.push_back(ErrorJson(e));
     phases.push_back({{"phase", p.name},
                       {"iterations", p.iterations},
                       {"converged", p.converged},
                       {"final_error_by_filter", ErrorJson(p.final_error)},
+                      {"errors_by_filter", errors},
                       {"device_s", p.sim_s}});
   }
   report["servo"] = {{"phases", phases},

@@ -431,6 +431,7 @@ bool GraspTask::ServoTo(const Pose3& X_WT, std::string name, std::string_view re
     const servo::ServoCommand cmd =
         servo::ComputeServoCommand(tracker_->pose(), *X_CT_, config_.law);
     phase.final_error = cmd.error;
+    phase.errors.push_back(cmd.error);
     // Within the law's tolerance; or, after fine_iterations, within the coarse one (the arm's
     // smallest moves and the filter's noise can keep the error from ever settling in the fine).
     const bool coarse = phase.iterations >= config_.fine_iterations &&

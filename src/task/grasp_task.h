@@ -159,7 +159,8 @@ struct ServoPhase {
   int iterations = 0;
   bool converged = false;
   servo::ServoError final_error;  ///< the last error by the filter, in the gripper frame
-  double sim_s = 0;               ///< device time spent (s)
+  std::vector<servo::ServoError> errors;  ///< the error by the filter before each move, in order
+  double sim_s = 0;                       ///< device time spent (s)
 };
 
 /// Figures of one stage.
