@@ -254,7 +254,7 @@ int CullScene(mjvScene* scene, const mjrContext& context, double aspect) {
 
 }  // namespace
 
-Renderer::Renderer(const mjModel* model, int width, int height)
+Renderer::Renderer(const mjModel* model, int width, int height, int color_samples)
     : model_(model), width_(width), height_(height), egl_(SharedEglContext()) {
   if (model->vis.global.offwidth < width || model->vis.global.offheight < height) {
     throw std::runtime_error("Renderer: the model's off-screen buffer is smaller than " +
@@ -272,6 +272,9 @@ Renderer::Renderer(const mjModel* model, int width, int height)
   // renderer the shadow pass is most of a frame's cost (a stereo frame 55 -> 26 ms), and at
   // 320 x 240 only the shadows' edges soften by a pixel or so.
   mjModel* color_model = mj_copyModel(nullptr, model);
+  // A camera integrates the light over each pixel: the colour frames take `color_samples`
+  // samples a pixel (multisampling); the label renders (context_) keep one geom a pixel.
+  color_model->vis.quality.offsamples = color_samples;
   color_model->vis.quality.shadowsize = std::min(color_model->vis.quality.shadowsize,
                                                  kColorShadowSize);
   mjr_defaultContext(&color_context_);

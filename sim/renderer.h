@@ -27,7 +27,10 @@ class Renderer {
  public:
   /// @param model  the model whose cameras are rendered; must outlive the renderer and allow
   ///               an off-screen buffer of at least width x height (visual/global/offwidth).
-  Renderer(const mjModel* model, int width, int height);
+  /// @param color_samples  samples a pixel of the colour-only renders (RenderColor): 1 as the
+  ///               model's labels need, more to antialias edges as a sensor's pixel does
+  ///               (Scenario::camera_samples).
+  Renderer(const mjModel* model, int width, int height, int color_samples = 1);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;

@@ -40,7 +40,8 @@ std::vector<Face> BoxFaces(const Pose3& X_WO, const Eigen::Vector3d& size_O) {
 StereoRig::StereoRig(World* world, StripeOptics optics)
     : world_(world),
       optics_(optics),
-      renderer_(std::make_unique<Renderer>(world->model(), kWidth, kHeight)),
+      renderer_(std::make_unique<Renderer>(world->model(), kWidth, kHeight,
+                                           world->scenario().camera_samples)),
       camera_ids_{world->Id(mjOBJ_CAMERA, "camera_left"), world->Id(mjOBJ_CAMERA, "camera_right")},
       laser_site_(world->Id(mjOBJ_SITE, "laser_plane")),
       laser_joint_(world->Id(mjOBJ_JOINT, "laser")),
