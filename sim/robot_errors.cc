@@ -42,6 +42,8 @@ RobotErrors DrawRobotErrors(const RobotErrorsSpec& spec, std::uint64_t seed) {
                            Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
                            Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
                               .toRotationMatrix();
+  // Drawn last: the errors above stay those every earlier seed's robot had.
+  for (double& scale : e.camera_focal_scale) scale = 1.0 + 0.01 * draw.Gauss(spec.camera_focal_pct);
   return e;
 }
 
@@ -55,6 +57,9 @@ RobotErrorSummary Summarise(const RobotErrors& errors) {
   }
   s.head_mount_mm = 1e3 * errors.head_mount.translation().norm();
   s.head_mount_deg = RadToDeg(Eigen::AngleAxisd(errors.head_mount.linear()).angle());
+  for (double scale : errors.camera_focal_scale) {
+    s.max_focal_pct = std::max(s.max_focal_pct, 100.0 * std::abs(scale - 1.0));
+  }
   return s;
 }
 

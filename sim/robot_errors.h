@@ -10,6 +10,7 @@
 /// `resolution_rad`, and a goal is servoed to the nearest whole step (at rest the encoder reads
 /// it); a command starts moving `latency_s` after it is given.
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -37,6 +38,9 @@ struct RobotErrors {
   std::map<std::string, Eigen::Vector3d> body_offsets;
   /// The head's true mounting in its modelled one (WorldOptions::head_mount_error).
   Pose3 head_mount = Pose3::Identity();
+  /// Each camera's true focal length over its modelled one (left, right): World narrows or
+  /// widens the camera's field of view by it (fovy' = 2 atan(tan(fovy / 2) / scale)).
+  std::array<double, 2> camera_focal_scale = {1.0, 1.0};
 };
 
 /// One robot's errors from `spec`, drawn from `seed` (the same seed, the same robot; its own
@@ -46,6 +50,7 @@ RobotErrors DrawRobotErrors(const RobotErrorsSpec& spec, std::uint64_t seed);
 /// The largest joint zero error, link offset and mounting error, for logs and reports.
 struct RobotErrorSummary {
   double max_joint_zero_deg = 0, max_link_mm = 0, head_mount_mm = 0, head_mount_deg = 0;
+  double max_focal_pct = 0;  ///< the larger |scale - 1| of the two cameras (%)
 };
 RobotErrorSummary Summarise(const RobotErrors& errors);
 

@@ -30,6 +30,22 @@ Pose3 ObjectSpec::X_WO() const {
   return X_WO;
 }
 
+Pose3 BoardSpec::X_WB() const {
+  Pose3 X_WB = Pose3::Identity();
+  X_WB.linear() = RotZ(yaw) * Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  X_WB.translation() = position_W;
+  return X_WB;
+}
+
+Eigen::Vector3d BoardSpec::CornerB(int i, int j) const {
+  return Eigen::Vector3d((i - 0.5 * (cols - 1)) * square_m, (j - 0.5 * (rows - 1)) * square_m, 0);
+}
+
+Eigen::Vector2d BoardSpec::HalfExtent() const {
+  // (cols + 1) squares and a border of one square each side.
+  return Eigen::Vector2d(0.5 * (cols + 3) * square_m, 0.5 * (rows + 3) * square_m);
+}
+
 double InterferenceSpec::AngleAt(double t_s) const {
   double phase = std::fmod(t_s, period_s) / period_s;  // in (-1, 1)
   if (phase < 0.0) phase += 1.0;
@@ -102,6 +118,8 @@ class Parser : public yaml::Reader {
   ObjectSpec ParseObject(const YAML::Node& n, const std::string& field, ObjectNodes* nodes) const;
   InterferenceSpec ParseInterference(const YAML::Node& n, const std::string& field) const;
   TaskSpec ParseTask(const YAML::Node& n, const std::string& field, YAML::Node* name_node) const;
+  BoardSpec ParseBoard(const YAML::Node& n, const std::string& field) const;
+  void CheckBoard(const Scenario& s, std::size_t i, const YAML::Node& n) const;
   RobotErrorsSpec ParseRobotErrors(const YAML::Node& n, const std::string& field) const;
   void CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes>& nodes) const;
 };
@@ -205,6 +223,105 @@ InterferenceSpec Parser::ParseInterference(const YAML::Node& n, const std::strin
   return s;
 }
 
+BoardSpec Parser::ParseBoard(const YAML::Node& n, const std::string& field) const {
+  const Entries e = MapOf(n, field, {"cols", "rows", "square_mm", "position", "yaw_deg", "tilt_deg"},
+                          "a chessboard: a map with cols, rows, square_mm, position and "
+                          "optionally yaw_deg, tilt_deg");
+  BoardSpec b;
+  const std::string corners_expected = "a whole number of inner corners, " +
+                                       std::to_string(kMinBoardCorners) + "-" +
+                                       std::to_string(kMaxBoardCorners);
+  for (const auto& [key, value] : {std::pair<const char*, int*>{"cols", &b.cols},
+                                   std::pair<const char*, int*>{"rows", &b.rows}}) {
+    const YAML::Node& node = Require(e, n, field, key, corners_expected);
+    const double v = Number(node, Join(field, key), corners_expected);
+    if (v != std::round(v) || v < kMinBoardCorners || v > kMaxBoardCorners) {
+      Fail(node, Join(field, key), corners_expected);
+    }
+    *value = static_cast<int>(v);
+  }
+  if (b.cols == b.rows) {
+    Fail(n["rows"], Join(field, "rows"),
+         "a number of corners other than cols' (a square pattern has no orientation OpenCV can "
+         "tell)");
+  }
+  const std::string square_expected = "a square edge of " + Fixed(1e3 * kMinBoardSquare, 0) +
+                                      "-" + Fixed(1e3 * kMaxBoardSquare, 0) + " mm";
+  const YAML::Node& square = Require(e, n, field, "square_mm", square_expected);
+  b.square_m = 1e-3 * Number(square, Join(field, "square_mm"), square_expected);
+  if (b.square_m < kMinBoardSquare - 1e-12 || b.square_m > kMaxBoardSquare + 1e-12) {
+    Fail(square, Join(field, "square_mm"), square_expected);
+  }
+  const std::string pos_expected =
+      "the printed face's centre in W in m, as [x, y, z]: over the table top (x in [" +
+      Fixed(kTableMinX, 2) + ", " + Fixed(kTableMaxX, 2) + "], y in [" + Fixed(kTableMinY, 2) +
+      ", " + Fixed(kTableMaxY, 2) + "]), 0 < z <= " + Fixed(kMaxBoardHeight, 1);
+  const YAML::Node& position = Require(e, n, field, "position", pos_expected);
+  b.position_W = Numbers(position, Join(field, "position"), 3, pos_expected);
+  const Eigen::Vector3d& p = b.position_W;
+  if (p.x() < kTableMinX || p.x() > kTableMaxX || p.y() < kTableMinY || p.y() > kTableMaxY ||
+      p.z() <= 0.0 || p.z() > kMaxBoardHeight) {
+    Fail(position, Join(field, "position"), pos_expected);
+  }
+  if (const YAML::Node* yaw = Find(e, "yaw_deg")) {
+    const std::string yaw_expected = "a yaw about W z of -" + Fixed(kMaxYawDeg, 0) + " to " +
+                                     Fixed(kMaxYawDeg, 0) + " deg";
+    const double deg = Number(*yaw, Join(field, "yaw_deg"), yaw_expected);
+    if (std::abs(deg) > kMaxYawDeg) Fail(*yaw, Join(field, "yaw_deg"), yaw_expected);
+    b.yaw = DegToRad(deg);
+  }
+  if (const YAML::Node* tilt = Find(e, "tilt_deg")) {
+    const std::string tilt_expected = "a tilt of -90 to 90 deg (0: face up)";
+    const double deg = Number(*tilt, Join(field, "tilt_deg"), tilt_expected);
+    if (std::abs(deg) > 90.0) Fail(*tilt, Join(field, "tilt_deg"), tilt_expected);
+    b.tilt = DegToRad(deg);
+  }
+  return b;
+}
+
+void Parser::CheckBoard(const Scenario& s, std::size_t i, const YAML::Node& n) const {
+  const BoardSpec& b = s.boards[i];
+  const std::string field = Join(Index("boards", i), "position");
+  const Pose3 X_WB = b.X_WB();
+  const Eigen::Vector2d half = b.HalfExtent();
+  // The plate (5 mm thick, behind the face) sampled on a grid: above the table, clear of every
+  // object and of every other board.
+  constexpr int kSamples = 9;
+  for (int a = 0; a < kSamples; ++a) {
+    for (int c = 0; c < kSamples; ++c) {
+      for (double depth : {0.0, -0.005}) {
+        const Eigen::Vector3d p_B(half.x() * (2.0 * a / (kSamples - 1) - 1.0),
+                                  half.y() * (2.0 * c / (kSamples - 1) - 1.0), depth);
+        const Eigen::Vector3d p_W = X_WB * p_B;
+        if (p_W.z() < 0.0) {
+          Fail(n["position"], field,
+               "a board above the table top (its plate reaches z = " + Fixed(p_W.z()) + " m)");
+        }
+        for (std::size_t j = 0; j < s.objects.size(); ++j) {
+          const ObjectSpec& o = s.objects[j];
+          const Eigen::Vector3d p_O = o.X_WO().inverse() * p_W;
+          if ((p_O.cwiseAbs().array() <= 0.5 * o.size_O.array() + 0.005).all()) {
+            Fail(n["position"], field,
+                 "a board clear of every object by 5 mm (it reaches into " +
+                     Index("objects", j) + " '" + o.name + "')");
+          }
+        }
+        for (std::size_t j = 0; j < i; ++j) {
+          const BoardSpec& other = s.boards[j];
+          const Eigen::Vector3d p_O = other.X_WB().inverse() * p_W;
+          if (std::abs(p_O.x()) <= other.HalfExtent().x() &&
+              std::abs(p_O.y()) <= other.HalfExtent().y() && p_O.z() <= 0.005 &&
+              p_O.z() >= -0.01) {
+            Fail(n["position"], field,
+                 "a board clear of every other board (it reaches into " + Index("boards", j) +
+                     ")");
+          }
+        }
+      }
+    }
+  }
+}
+
 TaskSpec Parser::ParseTask(const YAML::Node& n, const std::string& field,
                            YAML::Node* name_node) const {
   const Entries e = MapOf(n, field, {"target", "lift"},
@@ -257,6 +374,7 @@ RobotErrorsSpec Parser::ParseRobotErrors(const YAML::Node& n, const std::string&
       {"head_latency_ms", &r.head_latency_ms, 500.0, "a command latency in ms"},
       {"head_mount_mm", &r.head_mount_mm, 50.0, "a mounting std. dev. in mm"},
       {"head_mount_deg", &r.head_mount_deg, 10.0, "a mounting std. dev. in deg"},
+      {"camera_focal_pct", &r.camera_focal_pct, 10.0, "a focal length std. dev. in %"},
   };
   Keys keys = {"enabled"};
   for (const Value& v : values) keys.push_back(v.key);
@@ -315,13 +433,14 @@ void Parser::CheckAcrossObjects(const Scenario& s, const std::vector<ObjectNodes
 
 Scenario Parser::Parse(const std::string& text) {
   const std::string top_expected =
-      "a map of scenario fields: name, seed, camera_noise, lighting, wall, objects, "
-      "interference, task, robot_errors, devices";
+      "a map of scenario fields: name, seed, camera_noise, camera_samples, lighting, wall, "
+      "objects, interference, boards, task, robot_errors, devices";
   const YAML::Node root = yaml::LoadDocument(text, path(), top_expected);
   if (!root.IsMap()) Fail(root, "top level", top_expected);
   const Entries e = MapOf(root, "",
-                          {"name", "seed", "camera_noise", "lighting", "wall", "objects",
-                           "interference", "task", "robot_errors", "devices"},
+                          {"name", "seed", "camera_noise", "camera_samples", "lighting", "wall",
+                           "objects",
+                           "interference", "boards", "task", "robot_errors", "devices"},
                           top_expected);
 
   Scenario s;
@@ -341,6 +460,13 @@ Scenario Parser::Parse(const std::string& text) {
     if (s.camera_noise < 0.0 || s.camera_noise > kMaxCameraNoise) {
       Fail(*noise, "camera_noise", expected);
     }
+  }
+
+  if (const YAML::Node* samples = Find(e, "camera_samples")) {
+    const std::string expected = "samples a pixel of the colour frames: 1, 2, 4 or 8";
+    const double v = Number(*samples, "camera_samples", expected);
+    if (v != 1 && v != 2 && v != 4 && v != 8) Fail(*samples, "camera_samples", expected);
+    s.camera_samples = static_cast<int>(v);
   }
 
   if (const YAML::Node* lighting = Find(e, "lighting")) {
@@ -391,6 +517,14 @@ Scenario Parser::Parse(const std::string& text) {
                    o.name + "')");
         }
       }
+    }
+  }
+
+  if (const YAML::Node* boards = Find(e, "boards")) {
+    if (!boards->IsSequence()) Fail(*boards, "boards", "a list of calibration chessboards");
+    for (std::size_t i = 0; i < boards->size(); ++i) {
+      s.boards.push_back(ParseBoard((*boards)[i], Index("boards", i)));
+      CheckBoard(s, i, (*boards)[i]);
     }
   }
 
@@ -467,6 +601,7 @@ std::string ScenarioYaml(const Scenario& s) {
   y << "name: " << s.name << "\n"
     << "seed: " << s.seed << "\n"
     << "camera_noise: " << num(s.camera_noise) << "\n"
+    << "camera_samples: " << s.camera_samples << "\n"
     << "lighting: {ambient: " << num(s.ambient) << "}\n";
   if (s.wall_x) y << "wall: {x: " << num(*s.wall_x) << "}\n";
   y << "objects:" << (s.objects.empty() ? " []\n" : "\n");
@@ -486,6 +621,13 @@ std::string ScenarioYaml(const Scenario& s) {
       << "    sweep_deg: " << list({RadToDeg(i.sweep_min), RadToDeg(i.sweep_max)}) << "\n"
       << "    period_s: " << num(i.period_s) << "\n";
   }
+  if (!s.boards.empty()) y << "boards:\n";
+  for (const BoardSpec& b : s.boards) {
+    y << "  - {cols: " << b.cols << ", rows: " << b.rows << ", square_mm: " << num(1e3 * b.square_m)
+      << ", position: " << list({b.position_W.x(), b.position_W.y(), b.position_W.z()})
+      << ", yaw_deg: " << num(RadToDeg(b.yaw)) << ", tilt_deg: " << num(RadToDeg(b.tilt))
+      << "}\n";
+  }
   if (s.task) {
     y << "task:\n  target: {"
       << (s.task->target_name.empty() ? "color: " + s.task->target_color
@@ -502,7 +644,8 @@ std::string ScenarioYaml(const Scenario& s) {
     << "  head_encoder_deg: " << num(r.head_encoder_deg) << "\n"
     << "  head_latency_ms: " << num(r.head_latency_ms) << "\n"
     << "  head_mount_mm: " << num(r.head_mount_mm) << "\n"
-    << "  head_mount_deg: " << num(r.head_mount_deg) << "\n";
+    << "  head_mount_deg: " << num(r.head_mount_deg) << "\n"
+    << "  camera_focal_pct: " << num(r.camera_focal_pct) << "\n";
   y << "devices: {}\n";
   return y.str();
 }

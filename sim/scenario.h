@@ -84,6 +84,36 @@ struct InterferenceSpec {
   double AngleAt(double t_s) const;
 };
 
+/// Accepted chessboard geometry (scenario list `boards`): inner corners along each side and
+/// the square's edge (m); OpenCV's detector needs at least 3 corners a side.
+constexpr int kMinBoardCorners = 3, kMaxBoardCorners = 20;
+constexpr double kMinBoardSquare = 0.005, kMaxBoardSquare = 0.1;
+/// A board's face centre stands over the table, at most this high (m).
+constexpr double kMaxBoardHeight = 1.0;
+
+/// A calibration chessboard on a stand (`hgrasp calibrate cameras`): a white plate printed with
+/// (cols + 1) x (rows + 1) squares, the one at the plate's -x, -y corner black, with a white
+/// border one square wide (OpenCV's detector needs it). The stand is not modelled: the board is
+/// a static body of the world. Its frame B: origin at the centre of the printed face, x along
+/// the cols, y along the rows, z out of the face.
+struct BoardSpec {
+  int cols = 9;                                          ///< inner corners along B x
+  int rows = 6;                                          ///< inner corners along B y
+  double square_m = 0.025;                               ///< square edge (YAML square_mm)
+  Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< the face centre in W (m)
+  double yaw = 0.0;   ///< rad about W z (YAML yaw_deg)
+  double tilt = 0.0;  ///< rad about the turned board's y axis (YAML tilt_deg); 0: face up
+
+  /// X_WB = Translation(position_W) * RotZ(yaw) * RotY(tilt): at tilt -45 deg and yaw 0 the face
+  /// looks up and back towards the robot (-x).
+  Pose3 X_WB() const;
+  /// Inner corner (i, j), i < cols, j < rows, in B: ((i - (cols - 1) / 2) s, (j - (rows - 1) / 2)
+  /// s, 0), in the order OpenCV's findChessboardCorners lists them (row by row).
+  Eigen::Vector3d CornerB(int i, int j) const;
+  /// Half the plate's extent in B x and y (m): the squares and the border.
+  Eigen::Vector2d HalfExtent() const;
+};
+
 /// What to grasp. Exactly one of target_color and target_name is non-empty.
 struct TaskSpec {
   std::string target_color;  ///< one of kColorNames, or empty
@@ -125,6 +155,13 @@ struct RobotErrorsSpec {
   /// believes (a mounting error moves every modelled box in W, which is not perception's).
   double head_mount_mm = 0.0;
   double head_mount_deg = 0.0;
+  /// Std. dev. of each camera's focal length against its datasheet (%): lenses of one type
+  /// differ by 1-2% in focal length, and the grabber's pixel clock adds its own scale; the
+  /// calibration files the scanner reads are nominal until `hgrasp calibrate cameras` measures
+  /// them. Off by default while the shipped calibration/sim/cameras.yaml is the nominal file
+  /// for every seed's robot (the scenes would need one calibration each);
+  /// scenarios/calibration_boards.yaml switches it on.
+  double camera_focal_pct = 0.0;
 };
 
 /// A parsed and checked scenario file.
@@ -133,10 +170,17 @@ struct Scenario {
   std::string name;              ///< required
   std::uint64_t seed = 0;        ///< every random draw in sim derives from it (DESIGN.md rule 6)
   double camera_noise = 0.0;     ///< std. dev. of Gaussian pixel noise, grey levels 0-255, >= 0
+  /// Samples a pixel of the twin's colour frames (1, 2, 4 or 8; multisampling): a real camera
+  /// integrates the light over each pixel, so an edge crossing it gives a grey between its two
+  /// sides; one sample a pixel aliases every edge by up to half a pixel. Sub-pixel corners need
+  /// it (a chessboard's: calibration RMS 0.30 px at 1, 0.13 px at 4); the scenes keep 1 until
+  /// their baselines are measured again with more.
+  int camera_samples = 1;
   double ambient = 0.35;         ///< lighting.ambient, 0-1
   std::optional<double> wall_x;  ///< wall: {x: ...}: the plane x = wall_x (m), facing the robot
   std::vector<ObjectSpec> objects;
   std::vector<InterferenceSpec> interference;
+  std::vector<BoardSpec> boards;  ///< calibration chessboards on stands
   std::optional<TaskSpec> task;
   RobotErrorsSpec robot_errors;  ///< robot_errors: {...}; absent: the defaults
   /// Each device's backend (drivers/config/device_config.h); a device not listed is simulated.

@@ -70,6 +70,31 @@ std::string ObjectsXml(const Scenario& sc) {
       << (o.specular ? " material=\"specular_" + o.name + "\"" : std::string()) << "/>"
       << "</body>\n";
   }
+  // Chessboards on stands: a white plate, its face at B z = 0, and black squares 0.04 mm proud
+  // of it (under a micrometre of depth resolution there: no fighting over the face).
+  for (std::size_t i = 0; i < sc.boards.size(); ++i) {
+    const BoardSpec& b = sc.boards[i];
+    const Pose3 X_WB = b.X_WB();
+    const Eigen::Quaterniond q(X_WB.linear());
+    const Eigen::Vector2d half = b.HalfExtent();
+    const std::string name = "board_" + std::to_string(i);
+    x << "<body name=\"" << name << "\" pos=\"" << Num(X_WB.translation().x()) << " "
+      << Num(X_WB.translation().y()) << " " << Num(X_WB.translation().z()) << "\" quat=\""
+      << Num(q.w()) << " " << Num(q.x()) << " " << Num(q.y()) << " " << Num(q.z()) << "\">"
+      << "<geom name=\"" << name << "\" type=\"box\" pos=\"0 0 -0.0025\" size=\""
+      << Num(half.x()) << " " << Num(half.y()) << " 0.0025\" material=\"board_white\"/>";
+    const double s = b.square_m;
+    for (int a = 0; a <= b.cols; ++a) {
+      for (int c = 0; c <= b.rows; ++c) {
+        if ((a + c) % 2 != 0) continue;  // square (0, 0), at the plate's -x, -y corner, is black
+        x << "<geom type=\"box\" pos=\"" << Num((a - 0.5 * b.cols) * s) << " "
+          << Num((c - 0.5 * b.rows) * s) << " 0.00002\" size=\"" << Num(0.5 * s) << " "
+          << Num(0.5 * s) << " 0.00002\" material=\"board_black\" contype=\"0\" "
+          << "conaffinity=\"0\"/>";
+      }
+    }
+    x << "</body>\n";
+  }
   if (sc.wall_x) {
     x << "<geom name=\"wall\" type=\"box\" pos=\"" << Num(*sc.wall_x + 0.01)
       << " 0 0.5\" size=\"0.01 1.0 0.5\" rgba=\"0.85 0.85 0.82 1\" contype=\"1\""
@@ -80,6 +105,13 @@ std::string ObjectsXml(const Scenario& sc) {
 
 std::string MaterialsXml(const Scenario& sc) {
   std::ostringstream x;
+  if (!sc.boards.empty()) {
+    // Matte print: a highlight on the board would wash out its corners.
+    x << "<material name=\"board_white\" rgba=\"0.92 0.92 0.92 1\" specular=\"0\" "
+         "shininess=\"0\"/>\n"
+      << "<material name=\"board_black\" rgba=\"0.04 0.04 0.04 1\" specular=\"0\" "
+         "shininess=\"0\"/>\n";
+  }
   for (const ObjectSpec& o : sc.objects) {
     if (!o.specular) continue;
     x << "<material name=\"specular_" << o.name << "\" rgba=\"" << Num(o.color_rgb.x()) << " "
@@ -175,6 +207,14 @@ World::World(Scenario scenario, const WorldOptions& options)
     const Eigen::Quaterniond q(X_PT.linear());
     for (int i = 0; i < 3; ++i) pos[i] = X_PT.translation()[i];
     quat[0] = q.w(), quat[1] = q.x(), quat[2] = q.y(), quat[3] = q.z();
+  }
+  // The true cameras: each one's focal length scaled, its field of view narrowed by as much.
+  for (int c = 0; c < 2; ++c) {
+    const double scale = errors_.camera_focal_scale[c];
+    if (scale == 1.0) continue;
+    const int id = Id(mjOBJ_CAMERA, c == 0 ? "camera_left" : "camera_right");
+    const double half_fovy = DegToRad(0.5 * model_->cam_fovy[id]);
+    model_->cam_fovy[id] = RadToDeg(2.0 * std::atan(std::tan(half_fovy) / scale));
   }
   data_ = mj_makeData(model_);
 

@@ -622,6 +622,75 @@ TEST(ScenarioHostileTest, InterferenceInsideABoxIsRefused) {
   EXPECT_NO_THROW(ParseScenario(above, "inline.yaml"));
 }
 
+// A chessboard on a stand: its frame, its corners and each field's checks.
+TEST(ScenarioBoardTest, FrameAndCornersByHand) {
+  const Scenario s = ParseScenario(
+      "name: t\nboards: [{cols: 4, rows: 3, square_mm: 20, position: [0.4, 0.1, 0.3], yaw_deg: "
+      "90, tilt_deg: -90}]\n",
+      "inline.yaml");
+  ASSERT_EQ(s.boards.size(), 1u);
+  const BoardSpec& b = s.boards[0];
+  EXPECT_EQ(b.cols, 4);
+  EXPECT_EQ(b.rows, 3);
+  EXPECT_NEAR(b.square_m, 0.02, 1e-15);
+  // Turned 90 deg about z, then stood up by -90 deg about its y: the face looks along -y of W
+  // (RotZ(90) * RotY(-90) * z = RotZ(90) * -x = -y), its x axis straight up.
+  const Pose3 X = b.X_WB();
+  EXPECT_TRUE((X.linear().col(2) - Eigen::Vector3d(0, -1, 0)).norm() < 1e-12);
+  EXPECT_TRUE((X.linear().col(0) - Eigen::Vector3d(0, 0, 1)).norm() < 1e-12);
+  EXPECT_TRUE((X.translation() - Eigen::Vector3d(0.4, 0.1, 0.3)).norm() < 1e-15);
+  // Corner (0, 0) at (-1.5, -1) squares from the centre; (3, 2) at (1.5, 1).
+  EXPECT_TRUE((b.CornerB(0, 0) - Eigen::Vector3d(-0.03, -0.02, 0)).norm() < 1e-15);
+  EXPECT_TRUE((b.CornerB(3, 2) - Eigen::Vector3d(0.03, 0.02, 0)).norm() < 1e-15);
+  // 5 x 4 squares and a border of one square: 7 x 6 squares of plate.
+  EXPECT_TRUE((b.HalfExtent() - Eigen::Vector2d(0.07, 0.06)).norm() < 1e-15);
+}
+
+TEST(ScenarioBoardTest, EachBadFieldIsNamed) {
+  const auto board = [](const std::string& fields) {
+    return "name: t\nobjects: [{name: a, shape: box, size: [0.1, 0.1, 0.1], position: [0.3, 0], "
+           "color: [1, 0, 0]}]\nboards: [{" + fields + "}]\n";
+  };
+  const std::string ok = "square_mm: 25, position: [0.3, 0.3, 0.3]";
+  const struct {
+    std::string yaml, field;
+  } cases[] = {
+      {board("cols: 8, rows: 6.5, " + ok), "boards[0].rows"},
+      {board("cols: 2, rows: 6, " + ok), "boards[0].cols"},
+      {board("cols: 21, rows: 6, " + ok), "boards[0].cols"},
+      {board("cols: 6, rows: 6, " + ok), "boards[0].rows"},  // square pattern
+      {board("cols: 8, rows: 6, square_mm: 2, position: [0.3, 0.3, 0.3]"), "boards[0].square_mm"},
+      {board("cols: 8, rows: 6, square_mm: 25, position: [0.3, 0.3]"), "boards[0].position"},
+      {board("cols: 8, rows: 6, square_mm: 25, position: [0.3, 0.3, 0]"), "boards[0].position"},
+      {board("cols: 8, rows: 6, square_mm: 25, position: [1.3, 0.3, 0.3]"), "boards[0].position"},
+      // Standing on its edge 5 cm up: its plate reaches through the table top.
+      {board("cols: 8, rows: 6, square_mm: 25, position: [0.3, 0.3, 0.05], tilt_deg: 90"),
+       "boards[0].position"},
+      // Lying just over box a.
+      {board("cols: 8, rows: 6, square_mm: 25, position: [0.3, 0.0, 0.102]"), "boards[0].position"},
+      {board("cols: 8, rows: 6, " + ok + ", tilt_deg: 91"), "boards[0].tilt_deg"},
+      {board("cols: 8, rows: 6, " + ok + ", colour: red"), "boards[0].colour"},
+      {board("rows: 6, " + ok), "boards[0].cols"},
+      {"name: t\nboards: {cols: 8}\n", "boards"},
+      {"name: t\nrobot_errors: {camera_focal_pct: 11}\n", "robot_errors.camera_focal_pct"},
+      {"name: t\ncamera_samples: 3\n", "camera_samples"},
+      {"name: t\ncamera_samples: 1.5\n", "camera_samples"},
+  };
+  for (const auto& c : cases) {
+    const InputError e = ParseError(c.yaml);
+    EXPECT_EQ(e.field(), c.field) << c.yaml << "\n" << e.what();
+  }
+  // Two boards through each other.
+  const InputError e = ParseError(
+      "name: t\nboards: [{cols: 8, rows: 6, " + ok + "}, {cols: 8, rows: 6, square_mm: 25, "
+      "position: [0.32, 0.3, 0.3], yaw_deg: 30}]\n");
+  EXPECT_EQ(e.field(), "boards[1].position") << e.what();
+  EXPECT_NE(std::string(e.what()).find("boards[0]"), std::string::npos) << e.what();
+  // Lying 1 cm over the box is clear of it.
+  EXPECT_NO_THROW(ParseScenario(
+      board("cols: 8, rows: 6, square_mm: 25, position: [0.3, 0.0, 0.115]"), "inline.yaml"));
+}
+
 // Two spellings of one port, and a symlink to it, are one port (compared by string before).
 TEST(ScenarioHostileTest, PortsAreComparedByTheDeviceTheyOpen) {
   const fs::path dir = fs::temp_directory_path() / "hgrasp_port_identity";

@@ -18,6 +18,7 @@ void ExpectSame(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(a.name, b.name);
   EXPECT_EQ(a.seed, b.seed);
   EXPECT_EQ(a.camera_noise, b.camera_noise);
+  EXPECT_EQ(a.camera_samples, b.camera_samples);
   EXPECT_EQ(a.ambient, b.ambient);
   EXPECT_EQ(a.wall_x, b.wall_x);
   ASSERT_EQ(a.objects.size(), b.objects.size());
@@ -56,6 +57,17 @@ void ExpectSame(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(r.head_latency_ms, q.head_latency_ms);
   EXPECT_EQ(r.head_mount_mm, q.head_mount_mm);
   EXPECT_EQ(r.head_mount_deg, q.head_mount_deg);
+  EXPECT_EQ(r.camera_focal_pct, q.camera_focal_pct);
+  ASSERT_EQ(a.boards.size(), b.boards.size());
+  for (std::size_t i = 0; i < a.boards.size(); ++i) {
+    const BoardSpec &x = a.boards[i], &y = b.boards[i];
+    EXPECT_EQ(x.cols, y.cols);
+    EXPECT_EQ(x.rows, y.rows);
+    EXPECT_NEAR(x.square_m, y.square_m, 1e-15);  // mm in the file
+    EXPECT_EQ(x.position_W, y.position_W);
+    EXPECT_NEAR(x.yaw, y.yaw, kAngle);
+    EXPECT_NEAR(x.tilt, y.tilt, kAngle);
+  }
   EXPECT_TRUE(b.devices.entries.empty());
 }
 
