@@ -11,6 +11,38 @@
 #include "common/error.h"
 
 namespace hgrasp::app {
+
+void CheckOutputFile(const std::string& path, const std::string& flag,
+                     const std::string& expected) {
+  namespace fs = std::filesystem;
+  const fs::path out(path);
+  if (path.empty()) throw InputError("", flag, "", expected);
+  std::error_code ec;
+  if (fs::is_directory(out, ec)) throw InputError("", flag, path, expected + " (it is a folder)");
+  for (fs::path p = out.parent_path(); !p.empty(); p = p.parent_path()) {
+    if (fs::exists(p, ec)) {
+      if (!fs::is_directory(p, ec)) {
+        throw InputError("", flag, path, expected + " (" + p.string() + " is a file)");
+      }
+      break;
+    }
+    if (p == p.parent_path()) break;
+  }
+}
+
+void CreateOutputFileParents(const std::string& path, const std::string& flag,
+                             const std::string& expected) {
+  namespace fs = std::filesystem;
+  const fs::path out(path);
+  if (!out.has_parent_path()) return;
+  std::error_code ec;
+  fs::create_directories(out.parent_path(), ec);
+  if (ec) {
+    throw InputError("", flag, path,
+                     expected + " (cannot create " + out.parent_path().string() + ": " +
+                         ec.message() + ")");
+  }
+}
 namespace {
 
 namespace fs = std::filesystem;

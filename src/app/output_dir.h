@@ -12,6 +12,16 @@
 
 namespace hgrasp::app {
 
+/// A single output file (`--out FILE` of the calibrate commands), checked before any work
+/// starts: not empty, not a folder, and no file where a folder of its path would be.
+/// @throws hgrasp::InputError naming `flag`, the path and `expected` otherwise.
+void CheckOutputFile(const std::string& path, const std::string& flag,
+                     const std::string& expected);
+/// Creates the folders above `path` (after the work: nothing is created for a failed one).
+/// @throws hgrasp::InputError naming `flag` and the path when they cannot be made.
+void CreateOutputFileParents(const std::string& path, const std::string& flag,
+                             const std::string& expected);
+
 class OutputDir {
  public:
   /// Checks `dir` and prepares to write into it, creating it (and missing parents) if needed.

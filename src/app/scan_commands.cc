@@ -43,22 +43,8 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   const sim::Scenario scenario = sim::LoadScenario(o.scenario);
   const auto cameras = robot::LoadStereoIntrinsics(ResolveDataPath(o.files.cameras));
   // --out is checked before the sweep: a folder or a path under a file cannot take the file.
-  const fs::path out(o.out_file);
   const std::string out_expected = "a path for the laser calibration file";
-  if (o.out_file.empty()) throw InputError("", "--out", "", out_expected);
-  std::error_code ec;
-  if (fs::is_directory(out, ec)) {
-    throw InputError("", "--out", o.out_file, out_expected + " (it is a folder)");
-  }
-  for (fs::path p = out.parent_path(); !p.empty(); p = p.parent_path()) {
-    if (fs::exists(p, ec)) {
-      if (!fs::is_directory(p, ec)) {
-        throw InputError("", "--out", o.out_file, out_expected + " (" + p.string() + " is a file)");
-      }
-      break;
-    }
-    if (p == p.parent_path()) break;
-  }
+  CheckOutputFile(o.out_file, "--out", out_expected);
   const auto head = Head();
   const StopSignals signals;
   Robot robot = OpenRobot(scenario, signals.request());
@@ -95,14 +81,7 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
     return 1;
   }
   const robot::LaserCalibration& cal = *calibrated;
-  if (out.has_parent_path()) {
-    fs::create_directories(out.parent_path(), ec);
-    if (ec) {
-      throw InputError("", "--out", o.out_file,
-                       out_expected + " (cannot create " + out.parent_path().string() + ": " +
-                           ec.message() + ")");
-    }
-  }
+  CreateOutputFileParents(o.out_file, "--out", out_expected);
   robot::SaveLaserCalibration(cal, o.out_file);
   spdlog::info("calibrate laser: {}; wrote {} ({:.1f} s)", report.Figures(), o.out_file,
                Seconds(t0));

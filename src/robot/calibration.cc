@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/write_file.h"
 #include "common/yaml_file.h"
 #include "common/yaml_reader.h"
 #include "common/yaml_util.h"
@@ -282,6 +283,34 @@ StereoIntrinsics ParseStereoIntrinsics(const std::string& text, const std::strin
     }
     return s;
   });
+}
+
+void SaveStereoIntrinsics(const StereoIntrinsics& s, const std::string& path,
+                          const std::string& note) {
+  const auto camera = [](const PinholeCamera& c) {
+    std::string line = "{width: ";
+    line.append(std::to_string(c.width)).append(", height: ").append(std::to_string(c.height));
+    line.append(", fx: ").append(Exact(c.fx)).append(", fy: ").append(Exact(c.fy));
+    line.append(", cx: ").append(Exact(c.cx)).append(", cy: ").append(Exact(c.cy));
+    return line.append("}");
+  };
+  std::string text =
+      "# hgrasp camera intrinsics: each camera an ideal pinhole (no distortion), in pixels, with\n"
+      "# the centre of pixel (column i, row j) at (i, j) (src/common/pinhole_camera.h).\n"
+      "# Read by hgrasp::robot::LoadStereoIntrinsics.\n";
+  std::istringstream lines(note);
+  for (std::string line; std::getline(lines, line);) text.append("# ").append(line).append("\n");
+  text.append("left: ").append(camera(s.left)).append("\n");
+  text.append("right: ").append(camera(s.right)).append("\n");
+  // What is written must read back: the reader's checks, before the file exists.
+  ParseStereoIntrinsics(text, path);
+  const std::string expected = "a writable path for the camera intrinsics";
+  if (path.empty()) throw InputError("", "output file", "", expected);
+  try {
+    WriteFileWhole(path, text);
+  } catch (const std::runtime_error& e) {
+    throw InputError(path, "", path, expected + ": " + e.what());
+  }
 }
 
 Plane LaserCalibration::PlaneH(std::int32_t count) const {

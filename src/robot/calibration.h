@@ -36,6 +36,15 @@ StereoIntrinsics LoadStereoIntrinsics(const std::string& path);
 /// As LoadStereoIntrinsics, on the text of such a file (`path` names it in errors).
 StereoIntrinsics ParseStereoIntrinsics(const std::string& text, const std::string& path);
 
+/// Writes `s` as a camera intrinsics file that LoadStereoIntrinsics reads back to the same
+/// values exactly (17 significant digits), after a header comment: the format's explanation,
+/// then each line of `note` (where the values came from: `hgrasp calibrate cameras` writes its
+/// views and reprojection RMS there). Written whole or not at all.
+/// @throws hgrasp::InputError naming the path when it cannot be written, or naming the field
+///         when `s` would not pass LoadStereoIntrinsics' checks.
+void SaveStereoIntrinsics(const StereoIntrinsics& s, const std::string& path,
+                          const std::string& note = "");
+
 /// The laser's calibration: a light plane turning about an axis fixed in H (the URDF link
 /// "camera_bracket"). At encoder count e:
 ///   theta = rad_per_count * e,  n(e) = Rot(axis_H, theta) * normal0_H,

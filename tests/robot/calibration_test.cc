@@ -165,6 +165,36 @@ LaserCalibration RandomCalibration(std::mt19937* rng) {
   return c;
 }
 
+TEST(StereoIntrinsicsTest, SaveLoadRoundTripIsExactWithTheNoteAsComments) {
+  const std::string path = TempPath("hgrasp_cameras_roundtrip.yaml");
+  StereoIntrinsics s;
+  s.left = {320, 240, 232.10000000000002, 231.7, 158.29999999999998, 121.2};
+  s.right = {320, 240, 1.0 / 3.0 * 690.0, 229.0, 160.1, 1e-3 + 119.0};
+  SaveStereoIntrinsics(s, path, "measured by a test\nsecond line");
+  const std::string text = ReadText(path);
+  EXPECT_NE(text.find("# measured by a test\n# second line\n"), std::string::npos) << text;
+  const StereoIntrinsics back = LoadStereoIntrinsics(path);
+  for (const auto& [got, want] : {std::pair{back.left, s.left}, {back.right, s.right}}) {
+    EXPECT_EQ(got.width, want.width);
+    EXPECT_EQ(got.height, want.height);
+    EXPECT_EQ(got.fx, want.fx);
+    EXPECT_EQ(got.fy, want.fy);
+    EXPECT_EQ(got.cx, want.cx);
+    EXPECT_EQ(got.cy, want.cy);
+  }
+  fs::remove(path);
+}
+
+TEST(StereoIntrinsicsTest, SavingCamerasTheReaderWouldRefuseWritesNothing) {
+  const std::string path = TempPath("hgrasp_cameras_bad.yaml");
+  fs::remove(path);
+  StereoIntrinsics s;
+  s.left = {320, 240, 230, 230, 159.5, 119.5};
+  s.right = {320, 240, 300, 300, 159.5, 119.5};  // 30% off the left: not the same lens
+  EXPECT_THROW(SaveStereoIntrinsics(s, path), InputError);
+  EXPECT_FALSE(fs::exists(path));
+}
+
 TEST(LaserCalibrationTest, SaveLoadRoundTripIsExact) {
   const std::string path = TempPath("hgrasp_laser_roundtrip.yaml");
   std::mt19937 rng(2002);
