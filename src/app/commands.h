@@ -37,6 +37,23 @@ struct CalibrateLaserOptions {
 /// `hgrasp calibrate laser`: the laser's self-calibration (paper eq. 6) over a sweep.
 int CalibrateLaser(const CalibrateLaserOptions& options);
 
+struct CalibrateCamerasOptions {
+  std::string scenario;     ///< a scene with chessboards on stands (scenarios/calibration_boards.yaml)
+  std::string out_file;     ///< the camera intrinsics YAML to write
+  std::string report_file;  ///< optional: the views, the fit and (on the twin) its truth, as JSON
+  std::string views_dir;    ///< optional: each view's images with the corners found, as PNGs
+  /// Points in W (m) the head looks at, one per board; from each, kPosesPerPoint head poses.
+  /// The default: the boards of scenarios/calibration_boards.yaml.
+  std::vector<std::array<double, 3>> look_at = {
+      {0.241, -0.251, 0.371}, {0.358, 0.0, 0.371}, {0.241, 0.251, 0.371}};
+  int board_cols = 8, board_rows = 6;  ///< inner corners
+  double square_mm = 25.0;
+  std::string cameras = "calibration/sim/cameras.yaml";  ///< nominal: only for the report
+};
+
+/// `hgrasp calibrate cameras`: stereo calibration from chessboards the head looks at.
+int CalibrateCameras(const CalibrateCamerasOptions& options);
+
 struct ScanOptions {
   std::string scenario;
   std::string out_dir;

@@ -4,7 +4,9 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <system_error>
@@ -63,6 +65,44 @@ std::vector<std::int32_t> EncoderCounts(const std::vector<std::string>& text) {
   return counts;
 }
 
+// --at's values: "X,Y,Z", a point in W in m over the table.
+std::vector<std::array<double, 3>> LookAtPoints(const std::vector<std::string>& text) {
+  std::vector<std::array<double, 3>> points;
+  for (const std::string& s : text) {
+    std::array<double, 3> p{};
+    std::size_t at = 0;
+    bool ok = true;
+    for (int i = 0; i < 3 && ok; ++i) {
+      const std::size_t comma = i < 2 ? s.find(',', at) : s.size();
+      ok = comma != std::string::npos && comma > at;
+      if (!ok) break;
+      const auto [end, ec] = std::from_chars(s.data() + at, s.data() + comma, p[i]);
+      ok = ec == std::errc() && end == s.data() + comma && std::isfinite(p[i]);
+      at = comma + 1;
+    }
+    if (!ok || std::abs(p[0]) > 2.0 || std::abs(p[1]) > 2.0 || p[2] < -0.5 || p[2] > 2.0) {
+      throw hgrasp::InputError("", "--at", s,
+                               "a point in W in m as X,Y,Z, within 2 m of the robot (e.g. "
+                               "0.36,0,0.37)");
+    }
+    points.push_back(p);
+  }
+  return points;
+}
+
+// --board: "COLSxROWS", inner corners.
+void BoardCorners(const std::string& text, int* cols, int* rows) {
+  const std::size_t x = text.find('x');
+  const auto number = [](std::string_view s, int* v) {
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), *v);
+    return !s.empty() && ec == std::errc() && end == s.data() + s.size();
+  };
+  if (x == std::string::npos || !number(std::string_view(text).substr(0, x), cols) ||
+      !number(std::string_view(text).substr(x + 1), rows)) {
+    throw hgrasp::InputError("", "--board", text, "inner corners as COLSxROWS, e.g. 8x6");
+  }
+}
+
 // --seeds: "N" or "FIRST..LAST", non-negative integers.
 void SeedRange(const std::string& text, std::uint64_t* first, std::uint64_t* last) {
   const auto number = [&](std::string_view s, std::uint64_t* v) {
@@ -109,6 +149,34 @@ int main(int argc, char** argv) {
   cmd_calibrate_laser->add_option("--out", calibrate.out_file, "laser calibration YAML to write")
       ->required();
   cmd_calibrate_laser->add_option("--cameras", calibrate.files.cameras, "camera intrinsics YAML");
+
+  hgrasp::app::CalibrateCamerasOptions calibrate_cameras;
+  CLI::App* cmd_calibrate_cameras = cmd_calibrate->add_subcommand(
+      "cameras",
+      "Both cameras' intrinsics from chessboards the head looks at (OpenCV stereo calibration); "
+      "writes the cameras file the scanner reads");
+  cmd_calibrate_cameras->add_option("scenario", calibrate_cameras.scenario, "scenario YAML file")
+      ->required();
+  cmd_calibrate_cameras->add_option("--out", calibrate_cameras.out_file,
+                                    "camera intrinsics YAML to write")
+      ->required();
+  cmd_calibrate_cameras->add_option("--report", calibrate_cameras.report_file,
+                                    "JSON report: views, fit, and the twin's truth");
+  cmd_calibrate_cameras->add_option("--views", calibrate_cameras.views_dir,
+                                    "folder for each view's images with the corners found");
+  std::vector<std::string> look_at_text;
+  cmd_calibrate_cameras
+      ->add_option("--at", look_at_text,
+                   "a point in W (m) the head looks at, one per board (repeat; default: the "
+                   "boards of scenarios/calibration_boards.yaml)")
+      ->type_name("X,Y,Z");
+  std::string board_text;
+  cmd_calibrate_cameras->add_option("--board", board_text, "inner corners, COLSxROWS (default 8x6)")
+      ->type_name("COLSxROWS");
+  cmd_calibrate_cameras->add_option("--square-mm", calibrate_cameras.square_mm,
+                                    "the board's square edge (mm, default 25)");
+  cmd_calibrate_cameras->add_option("--cameras", calibrate_cameras.cameras,
+                                    "the nominal camera intrinsics, for the report");
 
   // The commands that scan a scenario share its arguments: scenario, --out, calibration files.
   auto scene_command = [&](const char* name, const char* what, std::string* scenario,
@@ -288,6 +356,13 @@ int main(int argc, char** argv) {
       return hgrasp::app::Render(render);
     }
     if (*cmd_calibrate_laser) return hgrasp::app::CalibrateLaser(calibrate);
+    if (*cmd_calibrate_cameras) {
+      if (!look_at_text.empty()) calibrate_cameras.look_at = LookAtPoints(look_at_text);
+      if (!board_text.empty()) {
+        BoardCorners(board_text, &calibrate_cameras.board_cols, &calibrate_cameras.board_rows);
+      }
+      return hgrasp::app::CalibrateCameras(calibrate_cameras);
+    }
     if (*cmd_scan) return hgrasp::app::Scan(scan);
     if (*cmd_model) return hgrasp::app::Model(model);
     if (*cmd_plan) return hgrasp::app::Plan(plan);
