@@ -260,6 +260,11 @@ Renderer::Renderer(const mjModel* model, int width, int height, int color_sample
     throw std::runtime_error("Renderer: the model's off-screen buffer is smaller than " +
                              std::to_string(width) + " x " + std::to_string(height));
   }
+  supersample_ = static_cast<int>(std::lround(std::sqrt(static_cast<double>(color_samples))));
+  if (color_samples < 1 || supersample_ * supersample_ != color_samples || supersample_ > 4) {
+    throw std::invalid_argument("Renderer: samples a pixel must be 1, 4, 9 or 16, not " +
+                                std::to_string(color_samples));
+  }
   mjv_defaultScene(&scene_);
   mjv_defaultOption(&option_);
   mjr_defaultContext(&context_);
@@ -273,8 +278,15 @@ Renderer::Renderer(const mjModel* model, int width, int height, int color_sample
   // 320 x 240 only the shadows' edges soften by a pixel or so.
   mjModel* color_model = mj_copyModel(nullptr, model);
   // A camera integrates the light over each pixel: the colour frames take `color_samples`
-  // samples a pixel (multisampling); the label renders (context_) keep one geom a pixel.
-  color_model->vis.quality.offsamples = color_samples;
+  // samples a pixel on a regular grid, rendered at supersample_ times the resolution and
+  // averaged over each supersample_^2 block (whose centre is the pixel's: the intrinsics hold).
+  // Supersampling rather than GL multisampling: the same samples on every GL (a multisample
+  // buffer's pattern and resolve are the driver's), shading and textures sampled too.
+  color_model->vis.quality.offsamples = 0;
+  color_model->vis.global.offwidth =
+      std::max(color_model->vis.global.offwidth, supersample_ * width);
+  color_model->vis.global.offheight =
+      std::max(color_model->vis.global.offheight, supersample_ * height);
   color_model->vis.quality.shadowsize = std::min(color_model->vis.quality.shadowsize,
                                                  kColorShadowSize);
   mjr_defaultContext(&color_context_);
@@ -298,7 +310,8 @@ cv::Mat Renderer::RenderColor(const mjData* data, int camera_id) {
   mjv_defaultCamera(&camera);
   camera.type = mjCAMERA_FIXED;
   camera.fixedcamid = camera_id;
-  const mjrRect viewport = {0, 0, width_, height_};
+  const int k = supersample_, w = k * width_, h = k * height_;
+  const mjrRect viewport = {0, 0, w, h};
   mjv_updateScene(model_, const_cast<mjData*>(data), &option_, nullptr, &camera, mjCAT_ALL,
                   &scene_);
   egl_->MakeCurrent();
@@ -309,12 +322,33 @@ cv::Mat Renderer::RenderColor(const mjData* data, int camera_id) {
                       ? CullScene(&scene_, color_context_, static_cast<double>(width_) / height_)
                       : 0;
   mjr_render(viewport, &scene_, &color_context_);
-  mjr_readPixels(rgb_.data(), nullptr, viewport, &color_context_);
+  if (k == 1) {
+    mjr_readPixels(rgb_.data(), nullptr, viewport, &color_context_);
+    cv::Mat color(height_, width_, CV_8UC3);
+    for (int r = 0; r < height_; ++r) {
+      const unsigned char* src = &rgb_[3 * (height_ - 1 - r) * width_];
+      auto* row = color.ptr<cv::Vec3b>(r);
+      for (int c = 0; c < width_; ++c) {
+        row[c] = cv::Vec3b(src[3 * c + 2], src[3 * c + 1], src[3 * c]);
+      }
+    }
+    return color;
+  }
+  supersampled_.resize(3 * static_cast<size_t>(w) * h);
+  mjr_readPixels(supersampled_.data(), nullptr, viewport, &color_context_);
   cv::Mat color(height_, width_, CV_8UC3);
+  const int n = k * k;
   for (int r = 0; r < height_; ++r) {
-    const unsigned char* src = &rgb_[3 * (height_ - 1 - r) * width_];
     auto* row = color.ptr<cv::Vec3b>(r);
-    for (int c = 0; c < width_; ++c) row[c] = cv::Vec3b(src[3 * c + 2], src[3 * c + 1], src[3 * c]);
+    for (int c = 0; c < width_; ++c) {
+      int sum[3] = {0, 0, 0};
+      for (int dr = 0; dr < k; ++dr) {
+        const unsigned char* src = &supersampled_[3 * ((h - 1 - (k * r + dr)) * w + k * c)];
+        for (int i = 0; i < 3 * k; ++i) sum[i % 3] += src[i];
+      }
+      // (rounded to the nearest grey level; RGB from the buffer, BGR out)
+      row[c] = cv::Vec3b((sum[2] + n / 2) / n, (sum[1] + n / 2) / n, (sum[0] + n / 2) / n);
+    }
   }
   return color;
 }

@@ -27,9 +27,10 @@ class Renderer {
  public:
   /// @param model  the model whose cameras are rendered; must outlive the renderer and allow
   ///               an off-screen buffer of at least width x height (visual/global/offwidth).
-  /// @param color_samples  samples a pixel of the colour-only renders (RenderColor): 1 as the
-  ///               model's labels need, more to antialias edges as a sensor's pixel does
-  ///               (Scenario::camera_samples).
+  /// @param color_samples  samples a pixel of the colour-only renders (RenderColor), on a
+  ///               regular grid: 1, 4, 9 or 16 (Scenario::camera_samples); more than 1
+  ///               antialiases edges as a sensor's pixel does. Throws std::invalid_argument
+  ///               otherwise.
   Renderer(const mjModel* model, int width, int height, int color_samples = 1);
   ~Renderer();
   Renderer(const Renderer&) = delete;
@@ -73,7 +74,9 @@ class Renderer {
   mjvOption option_;
   mjrContext context_;
   mjrContext color_context_;  // the same, with a smaller shadow map (RenderColor)
+  int supersample_ = 1;  // RenderColor renders at this many times the resolution a side
   std::vector<unsigned char> rgb_;
+  std::vector<unsigned char> supersampled_;
   std::vector<float> depth_;
   bool culling_enabled_ = true;
   int culled_geoms_ = 0;

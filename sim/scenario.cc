@@ -463,9 +463,9 @@ Scenario Parser::Parse(const std::string& text) {
   }
 
   if (const YAML::Node* samples = Find(e, "camera_samples")) {
-    const std::string expected = "samples a pixel of the colour frames: 1, 2, 4 or 8";
+    const std::string expected = "samples a pixel of the colour frames: 1, 4, 9 or 16";
     const double v = Number(*samples, "camera_samples", expected);
-    if (v != 1 && v != 2 && v != 4 && v != 8) Fail(*samples, "camera_samples", expected);
+    if (v != 1 && v != 4 && v != 9 && v != 16) Fail(*samples, "camera_samples", expected);
     s.camera_samples = static_cast<int>(v);
   }
 

@@ -170,10 +170,11 @@ struct Scenario {
   std::string name;              ///< required
   std::uint64_t seed = 0;        ///< every random draw in sim derives from it (DESIGN.md rule 6)
   double camera_noise = 0.0;     ///< std. dev. of Gaussian pixel noise, grey levels 0-255, >= 0
-  /// Samples a pixel of the twin's colour frames (1, 2, 4 or 8; multisampling): a real camera
-  /// integrates the light over each pixel, so an edge crossing it gives a grey between its two
-  /// sides; one sample a pixel aliases every edge by up to half a pixel. Sub-pixel corners need
-  /// it (a chessboard's: calibration RMS 0.30 px at 1, 0.13 px at 4); the scenes keep 1 until
+  /// Samples a pixel of the twin's colour frames (1, 4, 9 or 16: 1x1 to 4x4 on a grid): a real
+  /// camera integrates the light over each pixel, so an edge crossing it gives a grey between
+  /// its two sides; one sample a pixel aliases every edge by up to half a pixel. (The stripe
+  /// keeps one sample a pixel: it is drawn from the labels and depth.) Sub-pixel corners need
+  /// it (a chessboard's: calibration RMS 0.30 px at 1, 0.14 px at 4); the scenes keep 1 until
   /// their baselines are measured again with more.
   int camera_samples = 1;
   double ambient = 0.35;         ///< lighting.ambient, 0-1

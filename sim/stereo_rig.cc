@@ -120,9 +120,17 @@ const CameraView& StereoRig::View(int camera) {
   if (!valid_[camera]) {
     const int id = camera_ids_[camera];
     const mjData* state = pending_view_[camera] ? pending_view_[camera].get() : world_->data();
-    views_[camera] =
-        CameraView::Make(renderer_->Intrinsics(id), Renderer::OpticalFramePose(state, id),
-                         renderer_->Render(state, id), RedReflectance());
+    CameraImages images = renderer_->Render(state, id);
+    // With more than one sample a pixel, the frames with the stripe start from the same
+    // antialiased colour as the frames without it (the full render's labels and depth keep one
+    // sample a pixel): else every edge would differ between a lit and a dark frame.
+    if (world_->scenario().camera_samples > 1) {
+      images.color = renderer_->RenderColor(state, id);
+      ++color_renders_;
+    }
+    views_[camera] = CameraView::Make(renderer_->Intrinsics(id),
+                                      Renderer::OpticalFramePose(state, id), std::move(images),
+                                      RedReflectance());
     valid_[camera] = true;
     pending_view_[camera].reset();
     ++full_renders_;

@@ -187,6 +187,39 @@ objects:
   EXPECT_EQ(rig.color_renders(), 2);
 }
 
+// A frame of 4 samples a pixel is the 2x2 average of the frame rendered at twice the resolution
+// (pixel for pixel, but for rounding: the blocks sit on the pixels the intrinsics describe), and
+// differs from the one-sample frame only along edges, where it takes the greys between.
+TEST(RenderColorTest, FourSamplesAPixelAverageTheFrameAtTwiceTheResolution) {
+  World world(ScenarioFromYaml(R"(name: colour
+objects:
+  - {name: a, shape: box, size: [0.06, 0.09, 0.12], position: [0.30, 0.06], yaw_deg: 25, color: [0.95, 0.85, 0.1]}
+)"));
+  const mjModel* m = world.model();
+  Renderer one(m, 320, 240, 1), four(m, 320, 240, 4), twice(m, 640, 480, 1);
+  EXPECT_THROW(Renderer(m, 320, 240, 2), std::invalid_argument);
+  const int camera = world.Id(mjOBJ_CAMERA, "camera_left");
+  const cv::Mat sampled = four.RenderColor(world.data(), camera);
+  const cv::Mat fine = twice.RenderColor(world.data(), camera);
+  const cv::Mat single = one.RenderColor(world.data(), camera);
+  ASSERT_EQ(sampled.size(), cv::Size(320, 240));
+  cv::Mat fine16, averaged;
+  fine.convertTo(fine16, CV_32FC3);
+  cv::resize(fine16, averaged, sampled.size(), 0, 0, cv::INTER_AREA);
+  cv::Mat sampled32;
+  sampled.convertTo(sampled32, CV_32FC3);
+  EXPECT_LE(cv::norm(sampled32, averaged, cv::NORM_INF), 0.51);
+  cv::Mat diff, grey;
+  cv::absdiff(sampled, single, diff);
+  cv::cvtColor(diff, grey, cv::COLOR_BGR2GRAY);
+  const double edges = cv::countNonZero(grey > 8) / static_cast<double>(grey.total());
+  std::printf("4 samples a pixel: %.2f %% of pixels differ from one sample's by more than 8\n",
+              100.0 * edges);
+  EXPECT_GT(edges, 0.0005);  // the box's and the table's edges
+  EXPECT_LT(edges, 0.05);
+  EXPECT_LT(cv::mean(grey)[0], 1.0);
+}
+
 // The colour-only render leaves out the geoms that cannot change it (out of view, and no shadow
 // on what is in view): its image is the one that draws them all, pixel for pixel, with the arms
 // and the head anywhere within a fifth of their ranges around home and the LEDs switched at

@@ -674,6 +674,7 @@ TEST(ScenarioBoardTest, EachBadFieldIsNamed) {
       {"name: t\nboards: {cols: 8}\n", "boards"},
       {"name: t\nrobot_errors: {camera_focal_pct: 11}\n", "robot_errors.camera_focal_pct"},
       {"name: t\ncamera_samples: 3\n", "camera_samples"},
+      {"name: t\ncamera_samples: 2\n", "camera_samples"},
       {"name: t\ncamera_samples: 1.5\n", "camera_samples"},
   };
   for (const auto& c : cases) {
