@@ -32,10 +32,11 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 }
 
 // From each point the head looks at, the board is seen at the image centre and then moved
-// towards each side of the image (pan and tilt offsets, deg): the principal point is told from
+// towards each side and corner of the image (pan and tilt offsets, deg; at the corners some
+// views lose a corner of the board and are skipped): the principal point is told from
 // the focal length only by corners all over the image.
-constexpr double kPanOffsetsDeg[] = {0.0, 10.0, -10.0, 0.0, 0.0, 10.0, -10.0};
-constexpr double kTiltOffsetsDeg[] = {0.0, 0.0, 0.0, 8.0, -8.0, 8.0, -8.0};
+constexpr double kPanOffsetsDeg[] = {0.0, 14.0, -14.0, 0.0, 0.0, 14.0, -14.0, 14.0, -14.0};
+constexpr double kTiltOffsetsDeg[] = {0.0, 0.0, 0.0, 10.0, -10.0, 10.0, -10.0, -10.0, 10.0};
 
 // The head poses: for each point, the cyclopean axis on it (servo::HeadTracker over the head's
 // kinematics, verge as for a scan), then the offsets.

@@ -34,11 +34,10 @@ struct ChessBoard {
 };
 
 /// The inner corners of `board` in a BGR (or grey) image, refined to a fraction of a pixel
-/// (cv::findChessboardCorners on the image magnified 2x, then cv::cornerSubPix on the image
-/// itself); empty when the detector did not find every corner. The list starts at the corner
-/// nearest the image's top left of the two ends of the board's first row or last row (a
-/// chessboard turned half a turn looks the same), so that the two cameras of a stereo view list
-/// the same corner first.
+/// (cv::findChessboardCornersSB with CALIB_CB_ACCURACY on the image magnified 2x); empty when
+/// the detector did not find every corner. The list starts at the corner nearest the image's
+/// top left of the two ends of the board's first row or last row (a chessboard turned half a
+/// turn looks the same), so that the two cameras of a stereo view list the same corner first.
 std::vector<cv::Point2f> FindBoardCorners(const cv::Mat& image, const ChessBoard& board);
 
 /// One view of the board by both cameras.
