@@ -43,6 +43,11 @@ double EmulatorHost::Now() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
+EmulatorHost::Timing EmulatorHost::timing() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return timing_;
+}
+
 namespace {
 
 // Writes all of `bytes` to the (non-blocking) master; what the pty cannot take within a short
@@ -73,6 +78,17 @@ void EmulatorHost::Run() {
   std::vector<std::uint8_t> out;
   std::uint8_t buf[512];
   const int tick_ms = std::max(1, static_cast<int>(tick_s_ * 1000.0 + 0.5));
+  // A pass is due a tick after the one before began (sooner if bytes arrive): a pass that
+  // starts later than that, because this thread was off the CPU or the pass before took long
+  // (or a test held the device), is late by the difference.
+  double due = Now() + tick_ms * 1e-3;
+  auto account = [&](double t) {  // under mu_
+    ++timing_.ticks;
+    const double late = t - due;
+    if (late > kOverrunS) ++timing_.overruns;
+    timing_.worst_late_s = std::max(timing_.worst_late_s, late);
+    due = t + tick_ms * 1e-3;
+  };
   for (;;) {
     int fd;
     {
@@ -85,18 +101,23 @@ void EmulatorHost::Run() {
       {
         std::lock_guard<std::mutex> lock(mu_);
         out.clear();
-        device_->Advance(Now(), &out);
+        const double t = Now();
+        account(t);
+        device_->Advance(t, &out);
       }
       ::usleep(static_cast<useconds_t>(tick_ms * 1000));
       continue;
     }
     pollfd p{fd, POLLIN, 0};
     ::poll(&p, 1, tick_ms);
+    const double woke = Now();
     std::lock_guard<std::mutex> lock(mu_);
     if (stop_) return;
     if (pty_.master_fd() != fd) continue;  // vanished or reopened meanwhile
     out.clear();
     const double t = Now();
+    // When bytes woke poll they may have waited since before: the lateness is a lower bound.
+    account(woke);
     // Everything that has arrived goes to the device before it may send anything of its own,
     // whatever poll said and however late this thread runs: a frame the device sends reflects
     // every command that reached it before, as on a device with a timer of its own. (Advancing

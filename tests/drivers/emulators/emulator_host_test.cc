@@ -96,6 +96,22 @@ TEST(EmulatorHost, BytesThatArrivedGoToTheDeviceBeforeItsNextFrame) {
             0);
 }
 
+// A pass held off the CPU for 30 ms (here: the test holding the device) is an overrun of about
+// that much; the ticks before and after it count too.
+TEST(EmulatorHost, CountsTheTicksItWasLateFor) {
+  EmulatorHost host(std::make_unique<Incrementer>());
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const EmulatorHost::Timing before = host.timing();
+  EXPECT_GT(before.ticks, 3u);  // a tick every 2 ms
+  host.With([](DeviceEmulator&) { std::this_thread::sleep_for(std::chrono::milliseconds(30)); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const EmulatorHost::Timing after = host.timing();
+  EXPECT_GT(after.ticks, before.ticks + 3u);
+  EXPECT_GE(after.overruns, before.overruns + 1);
+  EXPECT_GE(after.worst_late_s, 0.025);
+  EXPECT_LT(after.worst_late_s, 1.0);
+}
+
 TEST(EmulatorHost, PortVanishesAndComesBackUnderItsLink) {
   const std::string link = ::testing::TempDir() + "hgrasp_emulator_host_link";
   EmulatorHost host(std::make_unique<Incrementer>(), link);

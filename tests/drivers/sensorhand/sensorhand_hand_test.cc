@@ -128,6 +128,13 @@ class FilterLink final : public ByteLink {
   std::vector<std::uint8_t> held_;
 };
 
+// How far the estimated opening may be from the emulator's true one, measured on this rig
+// (PROTOCOL.md, "How accurate the estimate is"): after free moves, after grips on an object
+// (the force samples, 12 ms apart, leave the pressing partly unseen), and at an end stop, where
+// the stream's "blocked" fixes it exactly.
+constexpr double kFreeMoveErrorM = 0.0005;
+constexpr double kGripErrorM = 0.0005;
+
 struct RigOptions {
   double object_width_m = 0.0;
   bool faulty = false;
@@ -178,6 +185,12 @@ struct Rig {
     }
     hand = std::make_unique<SensorHandHand>(std::move(link), o.hand);
   }
+  ~Rig() {
+    const EmulatorHost::Timing t = host->timing();
+    std::printf("emulator host: %llu ticks, %llu overruns, worst %.1f ms late\n",
+                static_cast<unsigned long long>(t.ticks),
+                static_cast<unsigned long long>(t.overruns), t.worst_late_s * 1e3);
+  }
   template <class F>
   auto Emu(F f) {
     return host->With([&](DeviceEmulator& d) { return f(dynamic_cast<SensorHandEmulator&>(d)); });
@@ -210,6 +223,25 @@ struct Rig {
     EXPECT_TRUE(LogExplains<sensorhand::Command>(hand->command_log().Snapshot(), all,
                                                  std::equal_to<sensorhand::Command>()));
   }
+  // The fingers stopped at `target`: within calm_tol (1 mm by default) while the driver is sure
+  // of its estimate to kFreeMoveErrorM, wider by as much as its bound is wider; and the truth
+  // always inside the driver's bound. The bound grows with the echo's delay (the driver takes a
+  // command as executed in the middle of the write-to-echo window), so a host loaded enough to
+  // delay the pty widens it rather than failing the test; the truth outside it fails.
+  void ExpectOpeningNear(double target, double calm_tol = 0.001) {
+    const SensorHandEstimate e = hand->estimate();
+    EXPECT_LE(EstimateError(), e.uncertainty_m + 1e-9) << target;
+    EXPECT_NEAR(Opening(), target,
+                calm_tol - kFreeMoveErrorM + std::max(kFreeMoveErrorM, e.uncertainty_m))
+        << target;
+  }
+  // The estimate within `calm_bound` of the truth while the driver is that sure of it, and the
+  // truth always inside the driver's bound (which a loaded host widens, as above).
+  void ExpectEstimateWithin(double calm_bound) {
+    const double u = hand->estimate().uncertainty_m;
+    EXPECT_LE(EstimateError(), u + 1e-9);
+    EXPECT_LT(EstimateError(), std::max(calm_bound, u));
+  }
   // |estimated - true opening| (m), once the fingers are still.
   double EstimateError() {
     return std::abs(hand->estimate().opening_m - Opening());
@@ -233,13 +265,6 @@ TEST(SensorHandHand, StartsTheStreamAndReads) {
   // The opening is the assumed start pose: nothing on the wire says otherwise.
   EXPECT_FALSE(rig.hand->estimate().referenced);
 }
-
-// How far the estimated opening may be from the emulator's true one, measured on this rig
-// (PROTOCOL.md, "How accurate the estimate is"): after free moves, after grips on an object
-// (the force samples, 12 ms apart, leave the pressing partly unseen), and at an end stop, where
-// the stream's "blocked" fixes it exactly.
-constexpr double kFreeMoveErrorM = 0.0005;
-constexpr double kGripErrorM = 0.0005;
 
 // What a free move's estimate may be off by: kFreeMoveErrorM, or the driver's own bound where
 // that is wider. The driver dates a stop from the window between its write and the echo's
@@ -307,7 +332,7 @@ TEST(SensorHandHand, ClosesToTheForceLimit) {
     ASSERT_EQ(rig.hand->Read(&s), Status::kOk);
     EXPECT_NEAR(s.grip_force_n, f, 1.1);
     EXPECT_NEAR(rig.Opening(), 0.05 - f / 5000.0, 1e-9);  // the emulator's object
-    EXPECT_NEAR(s.opening_m, rig.Opening(), kGripErrorM) << limit;
+    rig.ExpectEstimateWithin(kGripErrorM);
     std::printf("Close(%.0f N): %.1f N at %.4f m, estimate %.4f m\n", limit, f, rig.Opening(),
                 s.opening_m);
     // Speed 0 holds the grip.
@@ -319,9 +344,8 @@ TEST(SensorHandHand, ClosesToTheForceLimit) {
   // Five grips' errors add up (each press is partly unseen between force samples).
   std::printf("after 5 grips: estimate off by %.3f mm (bound %.3f mm)\n",
               rig.EstimateError() * 1e3, rig.hand->estimate().uncertainty_m * 1e3);
-  EXPECT_LT(rig.EstimateError(), 5 * kGripErrorM);
-  EXPECT_LE(rig.EstimateError(), rig.hand->estimate().uncertainty_m);
-  EXPECT_NEAR(rig.Opening(), 0.08, 0.001 + 5 * kGripErrorM);
+  rig.ExpectEstimateWithin(5 * kGripErrorM);
+  rig.ExpectOpeningNear(0.08, 0.001 + 5 * kGripErrorM);
   rig.ExpectLogsAgree();
 }
 
@@ -345,7 +369,7 @@ TEST(SensorHandHand, OpenOntoAnObjectStopsAtIt) {
               rig.Opening(), rig.Force(), rig.hand->estimate().opening_m);
   EXPECT_GT(rig.Opening(), 0.045);  // stopped at the object, eased off to a light touch
   EXPECT_LT(rig.Force(), 15.0);
-  EXPECT_LT(rig.EstimateError(), kGripErrorM);
+  rig.ExpectEstimateWithin(kGripErrorM);
   rig.ExpectLogsAgree();
 }
 
@@ -447,7 +471,7 @@ TEST(SensorHandHand, EchoesLostCommandsJudgedByTheStream) {
   ASSERT_EQ(rig.hand->Close(40.0), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(4.0));
   EXPECT_GT(rig.Force(), 36.0);
-  EXPECT_LT(rig.EstimateError(), 2 * kGripErrorM);
+  rig.ExpectEstimateWithin(2 * kGripErrorM);
   ASSERT_EQ(rig.hand->Open(0.07), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
   const SensorHandStats st = rig.hand->stats();
@@ -479,7 +503,7 @@ TEST(SensorHandHand, SwallowedCommandsAreSentAgainOnce) {
   }
   ASSERT_EQ(rig.hand->Open(0.065), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
-  EXPECT_NEAR(rig.Opening(), 0.065, 0.001 + 2 * kGripErrorM);
+  rig.ExpectOpeningNear(0.065, 0.001 + 2 * kGripErrorM);
   const SensorHandStats st = rig.hand->stats();
   std::printf("swallowed: %d commands dropped; %llu lost, %llu re-sent, %llu executed\n",
               rig.filter->dropped_commands(), static_cast<unsigned long long>(st.lost),
@@ -515,7 +539,7 @@ TEST(SensorHandHand, ReversalLostAtTheEndStopIsSentAgain) {
   EXPECT_EQ(hs.unresolved, 0u);
   EXPECT_GT(rig.Force(), 36.0);
   EXPECT_LE(rig.Force(), 40.2);
-  EXPECT_LT(rig.EstimateError(), 2 * kGripErrorM);
+  rig.ExpectEstimateWithin(2 * kGripErrorM);
   rig.ExpectLogsAgree();
 }
 
@@ -604,11 +628,13 @@ TEST(SensorHandHand, ClosingUnseenOntoAnObjectHomesFirst) {
               rig.Opening(), e.opening_m, e.fixes, rig.Force());
   EXPECT_FALSE(e.lost);
   EXPECT_GE(e.fixes, 1);  // it went to the end stop
-  EXPECT_LT(rig.EstimateError(), 2 * kGripErrorM);  // met the object at full speed from 0.1 m
+  // Met the object at full speed from 0.1 m: within the driver's own bound, which grows when
+  // the echoes come late (a loaded host).
+  rig.ExpectEstimateWithin(2 * kGripErrorM);
   EXPECT_LT(rig.Force(), 15.0);  // back at the object, touching lightly
   ASSERT_EQ(rig.hand->Open(0.07), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
-  EXPECT_NEAR(rig.Opening(), 0.07, 0.001 + kGripErrorM);
+  rig.ExpectOpeningNear(0.07);
   rig.ExpectLogsAgree();
 }
 
@@ -698,7 +724,7 @@ TEST(SensorHandHand, RestartsTheStreamAfterAHandReset) {
   EXPECT_TRUE(rig.Emu([](SensorHandEmulator& e) { return e.streaming(); }));
   ASSERT_EQ(rig.hand->Open(0.04), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
-  EXPECT_NEAR(rig.Opening(), 0.04, 0.001);
+  rig.ExpectOpeningNear(0.04);
   rig.ExpectLogsAgree();
 }
 
@@ -734,7 +760,7 @@ TEST(SensorHandHand, CutLinkReportedWithinHalfASecondAndRecovered) {
   ASSERT_EQ(st, Status::kOk);
   std::printf("mended: Open taken %.3f s after the cable was mended\n", Since(t0));
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
-  EXPECT_NEAR(rig.Opening(), 0.07, 0.001);
+  rig.ExpectOpeningNear(0.07);
   rig.ExpectLogsAgree();
 }
 
@@ -773,7 +799,7 @@ TEST(SensorHandHand, VanishedPortReportedAndRecovered) {
     const double target = power_cycle ? 0.03 : 0.06;
     ASSERT_EQ(rig.hand->Open(target), Status::kOk);
     ASSERT_TRUE(rig.hand->WaitIdle(3.0));
-    EXPECT_NEAR(rig.Opening(), target, 0.001);
+    rig.ExpectOpeningNear(target);
     EXPECT_TRUE(rig.Emu([](SensorHandEmulator& e) { return e.streaming(); }));
   }
   // The power cycle reset the emulator's counter, not its log.
@@ -841,7 +867,7 @@ TEST(SensorHandHand, FaultInjection1000Commands) {
   std::printf("estimate after the run: off by %.3f mm (bound %.3f mm, %d end-stop fixes)\n",
               drift_err * 1e3, drift.uncertainty_m * 1e3, drift.fixes);
   EXPECT_LE(drift_err, drift.uncertainty_m);
-  EXPECT_NEAR(rig.Opening(), 0.065, 0.0015);
+  rig.ExpectOpeningNear(0.065, 0.0015);
   const FaultCounts fc = rig.faulty->counts();
   const SensorHandStats hs = rig.hand->stats();
   std::printf(
