@@ -225,6 +225,20 @@ void Twin::WatchHands() {
                         world_->BodyPose(world_->Id(mjOBJ_BODY, side + "_gripper"))});
     }
     closing_[s] = closing;
+    const double v = hands_[s]->commanded_velocity();
+    if (v != hand_velocity_[s]) {
+      TwinHandEvent e;
+      e.side = s == 0 ? "left" : "right";
+      e.t_s = world_->time();
+      e.velocity_m_s = v;
+      e.opening_m = hands_[s]->opening_m();
+      e.force_n = hands_[s]->grip_force_n();
+      for (const SimObject& o : world_->objects()) {
+        e.objects.emplace_back(o.spec.name, world_->BodyPose(o.body));
+      }
+      hand_events_.push_back(std::move(e));
+      hand_velocity_[s] = v;
+    }
   }
 }
 
@@ -389,6 +403,17 @@ json Twin::Report() const {
     j["t_s"] = g.t_s;
     grips.push_back(j);
   }
+  json hand_events = json::array();
+  for (const TwinHandEvent& e : hand_events_) {
+    json objects = json::object();
+    for (const auto& [name, X] : e.objects) objects[name] = PoseJson(X);
+    hand_events.push_back({{"side", e.side},
+                           {"t_s", e.t_s},
+                           {"velocity_m_s", e.velocity_m_s},
+                           {"opening_m", e.opening_m},
+                           {"force_n", e.force_n},
+                           {"objects", objects}});
+  }
   json boxes = json::array();
   for (const SimObject& o : world_->objects()) {
     const Pose3 now = world_->BodyPose(o.body);
@@ -422,6 +447,7 @@ json Twin::Report() const {
           {"lines", lines},
           {"truth",
            {{"grips", grips},
+            {"hand_events", hand_events},
             {"boxes", boxes},
             {"head_rad",
              {world_->JointPosition("head_pan"), world_->JointPosition("head_tilt"),

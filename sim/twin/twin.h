@@ -92,6 +92,18 @@ struct TwinGrip {
   Pose3 X_WE;
 };
 
+/// A hand's motor changing speed (a start, a stop, a reversal): when, at what opening and grip
+/// force, and where every object stood then. The truth's account of a grasp: a box knocked
+/// over by the fingers shows between the close's start and its stop.
+struct TwinHandEvent {
+  std::string side;
+  double t_s = 0.0;
+  double velocity_m_s = 0.0;  ///< the new commanded pad speed (< 0 closing)
+  double opening_m = 0.0;
+  double force_n = 0.0;
+  std::vector<std::pair<std::string, Pose3>> objects;
+};
+
 class Twin {
  public:
   /// Builds the world and the emulators, opens the ptys (links in options.dir). Throws
@@ -162,7 +174,9 @@ class Twin {
   TwinFrameCounts frames_;
   std::vector<TwinExposure> exposures_;
   std::vector<TwinGrip> grips_;
+  std::vector<TwinHandEvent> hand_events_;
   std::array<bool, 2> closing_{};
+  std::array<double, 2> hand_velocity_{};
   std::vector<std::pair<double, std::string>> controls_;  ///< (twin time, command) run
   /// Per arm: its joints' dofs, and the last twin time any of them turned faster than
   /// kArmMovingRad_s (the arm truly moving).

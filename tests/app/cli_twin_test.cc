@@ -172,6 +172,39 @@ TEST(CliTwin, TheWholeGraspThroughTheRealDriversMatchesTheSimulatedRun) {
     const double err_deg = turn.angle() * 180.0 / 3.14159265358979323846;
     EXPECT_LT(err_mm, 5.0);
     EXPECT_LT(err_deg, 2.0);
+    // The close on the box, by the twin's hand events: the motor's start at the grip and its
+    // stop, with the target box's pose at each (a box knocked over by the fingers shows here).
+    int close_at = -1;
+    const json& events = truth["hand_events"];
+    for (std::size_t k = 0; k < events.size(); ++k) {
+      if (events[k]["side"] == side && events[k]["velocity_m_s"].get<double>() < 0.0) {
+        close_at = static_cast<int>(k);
+      }
+    }
+    ASSERT_GE(close_at, 0) << events.dump();
+    const json& close_start = events[static_cast<std::size_t>(close_at)];
+    EXPECT_NEAR(close_start["t_s"].get<double>(), grip["t_s"].get<double>(), 1e-9);
+    json close_stop;
+    for (std::size_t k = static_cast<std::size_t>(close_at) + 1; k < events.size(); ++k) {
+      if (events[k]["side"] == side) {
+        close_stop = events[k];
+        break;
+      }
+    }
+    ASSERT_TRUE(close_stop.is_object()) << events.dump();
+    EXPECT_EQ(close_stop["velocity_m_s"].get<double>(), 0.0);
+    auto upright = [](const json& pose) {  // the box's z axis from the vertical (deg)
+      return std::acos(std::clamp(Mat(pose["R"])(2, 2), -1.0, 1.0)) * 180.0 / 3.14159265358979;
+    };
+    for (const auto& [object, pose] : close_stop["objects"].items()) {
+      std::printf("twin %s: %s tilted %.1f deg at the close's start, %.1f deg at its stop "
+                  "(%.3f s later, opening %.1f mm, %.1f N)\n",
+                  name.c_str(), object.c_str(), upright(close_start["objects"][object]),
+                  upright(pose),
+                  close_stop["t_s"].get<double>() - close_start["t_s"].get<double>(),
+                  1e3 * close_stop["opening_m"].get<double>(),
+                  close_stop["force_n"].get<double>());
+    }
     // Lifted and held by truth: the highest box rose at least 45 mm and is in the hand.
     double rise = -1.0;
     for (const json& b : truth["boxes"]) rise = std::max(rise, b["rise_m"].get<double>());
