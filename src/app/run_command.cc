@@ -117,6 +117,17 @@ int Run(const RunOptions& o) {
   }
   nlohmann::json truth_run = nlohmann::json::object();
   task::GraspTask* task_ptr = nullptr;
+  // The target (truth only) and its pose at the look, before anything touched it.
+  const sim::SimObject* target_object = nullptr;
+  Pose3 X_WO_look = Pose3::Identity();
+  // How far the target has moved and turned since the look: a box the hand knocked over on the
+  // way in or in the close shows where it happened, whatever the task then reports.
+  auto target_moved = [&]() -> nlohmann::json {
+    const Pose3 X_WO = truth->world().BodyPose(target_object->body);
+    const Eigen::AngleAxisd turn(X_WO_look.linear().transpose() * X_WO.linear());
+    return {{"object_moved_m", (X_WO.translation() - X_WO_look.translation()).norm()},
+            {"object_turned_deg", RadToDeg(turn.angle())}};
+  };
   int pictures = 0;
   auto sink = [&](const device::StereoFrame& frame, const task::TaskView& view) {
     const bool key = !view.moment.empty();
@@ -138,8 +149,10 @@ int Run(const RunOptions& o) {
       const grasp::GraspPlan& plan = *task_ptr->result().plan;
       const Pose3& X_WT = view.moment == "grasp_reached" ? plan.X_WE : plan.X_WE_pre;
       const sim::PoseError e = sim::GripperPoseError(truth->world(), plan.side, X_WCL, X_WT);
-      truth_run[std::string(view.moment)] = {{"gripper_to_plan_m", e.translation_m},
-                                             {"gripper_to_plan_deg", RadToDeg(e.rotation_rad)}};
+      nlohmann::json& at = truth_run[std::string(view.moment)];
+      at = {{"gripper_to_plan_m", e.translation_m},
+            {"gripper_to_plan_deg", RadToDeg(e.rotation_rad)}};
+      if (target_object != nullptr) at.update(target_moved());
     }
   };
   sim::ScanTruth scan_truth;
@@ -160,12 +173,21 @@ int Run(const RunOptions& o) {
   if (sim_truth) {
     look_truth = LookTruth(*truth, task.result(), scan_truth);
     if (task.result().target) {
-      const sim::SimObject* object =
+      target_object =
           TargetObject(truth->world(), task.result().scene->boxes[*task.result().target]);
-      if (object != nullptr) z0 = truth->world().BodyPose(object->body).translation().z();
+      if (target_object != nullptr) {
+        X_WO_look = truth->world().BodyPose(target_object->body);
+        z0 = X_WO_look.translation().z();
+      }
     }
   }
-  const bool ok = planned && task.Approach() && task.Servo() && task.Close() && task.Lift();
+  // The close, and (truth only) where the target is after it.
+  auto close = [&] {
+    const bool closed = task.Close();
+    if (target_object != nullptr) truth_run["closed"] = target_moved();
+    return closed;
+  };
+  const bool ok = planned && task.Approach() && task.Servo() && close() && task.Lift();
   if (!ok) {
     // Said at once, before the safe stop (which may take a while on slow lines).
     spdlog::warn("run: {} ({}): leaving the robot safe", task::ToString(task.result().failure),

@@ -69,6 +69,33 @@ TEST(CliRunTest, DefaultScenarioIsGraspedAndLifted) {
   EXPECT_LE(report["truth"]["run"]["grasp_reached"]["gripper_to_plan_m"].get<double>(), 0.005);
   EXPECT_LE(report["truth"]["run"]["grasp_reached"]["gripper_to_plan_deg"].get<double>(), 2.0);
   EXPECT_NEAR(report["truth"]["run"]["object_rise_m"].get<double>(), 0.05, 0.005);
+  // The target stood where the look saw it until the fingers met it, and the close moved it
+  // little (the pads centre it between them).
+  for (const char* moment : {"servo_start", "pregrasp_reached", "grasp_reached"}) {
+    EXPECT_LT(report["truth"]["run"][moment]["object_moved_m"].get<double>(), 1e-4) << moment;
+    EXPECT_LT(report["truth"]["run"][moment]["object_turned_deg"].get<double>(), 0.1) << moment;
+  }
+  EXPECT_LT(report["truth"]["run"]["closed"]["object_moved_m"].get<double>(), 0.002);
+  EXPECT_LT(report["truth"]["run"]["closed"]["object_turned_deg"].get<double>(), 1.0);
+}
+
+// A tall, narrow box (45 x 86 x 135 mm) that the arm's joint move to the via pose above the
+// pre-grasp knocks over, before the servo starts: the truth says where it happened, and the
+// verdict is honest (the fingers close on nothing: grasp_slipped, never lifted). The approach
+// does not yet plan a path around the boxes; when it does, this scene should be lifted.
+TEST(CliRunTest, ABoxKnockedOverOnTheWayInIsNoGraspAndTheTruthSaysWhen) {
+  const auto out = FreshOutDir("knocked_over");
+  const auto r = RunHgrasp("run " + std::string(HGRASP_TEST_DATA) +
+                           "/run/knocked_over_3038.yaml --lean --out " + out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  std::ifstream in(out / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["failure"], "grasp_slipped") << report.dump(1);
+  EXPECT_FALSE(report["result"]["lifted"].get<bool>());
+  const nlohmann::json& run = report["truth"]["run"];
+  EXPECT_GT(run["servo_start"]["object_moved_m"].get<double>(), 0.05) << run.dump(1);
+  EXPECT_GT(run["servo_start"]["object_turned_deg"].get<double>(), 80.0) << run.dump(1);
+  EXPECT_LT(run["object_rise_m"].get<double>(), -0.03) << run.dump(1);
 }
 
 // DESIGN.md rule 6: the same scenario and seed give the same report, timings aside.
