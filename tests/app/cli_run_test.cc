@@ -79,8 +79,9 @@ TEST(CliRunTest, DefaultScenarioIsGraspedAndLifted) {
   EXPECT_LT(report["truth"]["run"]["closed"]["object_turned_deg"].get<double>(), 1.0);
 }
 
-// A tall, narrow box (45 x 86 x 135 mm) that the arm's joint move to the via pose above the
-// pre-grasp knocks over, before the servo starts: the truth says where it happened, and the
+// A tall, narrow box (45 x 86 x 135 mm) that the forearm knocks over on the arm's joint move to
+// the via pose above the pre-grasp (MuJoCo's contacts: right_link3 on the box at 14.49 s; the
+// hand stays 3 cm above it), before the servo starts: the truth says where it happened, and the
 // verdict is honest (the fingers close on nothing: grasp_slipped, never lifted). The approach
 // does not yet plan a path around the boxes; when it does, this scene should be lifted.
 TEST(CliRunTest, ABoxKnockedOverOnTheWayInIsNoGraspAndTheTruthSaysWhen) {
