@@ -218,14 +218,12 @@ void Twin::Expose(double late_s) {
 
 void Twin::WatchHands() {
   for (int s = 0; s < 2; ++s) {
-    const bool closing = hands_[s]->commanded_velocity() < 0.0;
-    if (closing && !closing_[s]) {
+    const double v = hands_[s]->commanded_velocity();
+    if (v < 0.0 && !(hand_velocity_[s] < 0.0)) {
       const std::string side = s == 0 ? "left" : "right";
       grips_.push_back({side, world_->time(),
                         world_->BodyPose(world_->Id(mjOBJ_BODY, side + "_gripper"))});
     }
-    closing_[s] = closing;
-    const double v = hands_[s]->commanded_velocity();
     if (v != hand_velocity_[s]) {
       TwinHandEvent e;
       e.side = s == 0 ? "left" : "right";

@@ -175,7 +175,6 @@ class Twin {
   std::vector<TwinExposure> exposures_;
   std::vector<TwinGrip> grips_;
   std::vector<TwinHandEvent> hand_events_;
-  std::array<bool, 2> closing_{};
   std::array<double, 2> hand_velocity_{};
   std::vector<std::pair<double, std::string>> controls_;  ///< (twin time, command) run
   /// Per arm: its joints' dofs, and the last twin time any of them turned faster than

@@ -168,17 +168,13 @@ int Run(const RunOptions& o) {
   // The truth of the look and the plan is taken before anything touches the objects, and so is
   // the target object's true height (truth only).
   std::optional<nlohmann::json> look_truth;
-  std::optional<double> z0;
   const bool planned = task.Look() && task.Plan();
   if (sim_truth) {
     look_truth = LookTruth(*truth, task.result(), scan_truth);
     if (task.result().target) {
       target_object =
           TargetObject(truth->world(), task.result().scene->boxes[*task.result().target]);
-      if (target_object != nullptr) {
-        X_WO_look = truth->world().BodyPose(target_object->body);
-        z0 = X_WO_look.translation().z();
-      }
+      if (target_object != nullptr) X_WO_look = truth->world().BodyPose(target_object->body);
     }
   }
   // The close, and (truth only) where the target is after it.
@@ -262,10 +258,10 @@ int Run(const RunOptions& o) {
   report["device_time_s"] = r.device_s;
   report["wall_time_s"] = r.wall_s;
   if (sim_truth) {
-    if (z0 && r.target) {
-      const sim::SimObject* object = TargetObject(truth->world(), r.scene->boxes[*r.target]);
-      const double rise = truth->world().BodyPose(object->body).translation().z() - *z0;
-      truth_run["object"] = object->spec.name;
+    if (target_object != nullptr) {
+      const double rise = truth->world().BodyPose(target_object->body).translation().z() -
+                          X_WO_look.translation().z();
+      truth_run["object"] = target_object->spec.name;
       truth_run["object_rise_m"] = rise;
     }
     report["truth"]["run"] = truth_run;
