@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -26,15 +27,17 @@ std::string ReadFile(const std::string& path) {
 
 // Loads MJCF text through MuJoCo's virtual file system (no temporary files).
 mjModel* LoadFromString(const std::string& xml, const std::string& name) {
-  mjVFS vfs;
-  mj_defaultVFS(&vfs);
-  if (mj_makeEmptyFileVFS(&vfs, name.c_str(), static_cast<int>(xml.size())) != 0) {
+  // On the heap: MuJoCo 2.2's mjVFS holds the names of mjMAXVFS files inline, 2 MB, a quarter of
+  // a thread's default stack.
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  if (mj_makeEmptyFileVFS(vfs.get(), name.c_str(), static_cast<int>(xml.size())) != 0) {
     throw std::runtime_error("MuJoCo VFS: cannot hold " + name);
   }
-  std::memcpy(vfs.filedata[mj_findFileVFS(&vfs, name.c_str())], xml.data(), xml.size());
+  std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), name.c_str())], xml.data(), xml.size());
   char error[1024] = "";
-  mjModel* m = mj_loadXML(name.c_str(), &vfs, error, sizeof error);
-  mj_deleteVFS(&vfs);
+  mjModel* m = mj_loadXML(name.c_str(), vfs.get(), error, sizeof error);
+  mj_deleteVFS(vfs.get());
   if (m == nullptr) throw std::runtime_error("MuJoCo rejected the model " + name + ": " + error);
   return m;
 }
