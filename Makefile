@@ -6,7 +6,8 @@
 # twin   builds, then starts `hgrasp twin` on scenarios/twin_robot.yaml (every device on its real
 #        wire, in wall-clock time) and runs the whole grasp against it through the real drivers
 #        into out/twin/; the twin's account (frames, overruns, truth) in $(TWIN_DIR)/twin.json
-# test   builds, then runs every test (ctest)
+# test   builds, then runs every test: the simulated-time ones two at a time (ctest -LE realtime),
+#        then the wall-clock ones (label realtime: ptys, streams, the twin's wires) alone
 # bench  builds, then runs the benchmarks in tests/bench/
 # fuzz   builds the protocol decoders' and the file loaders' libFuzzer targets with clang (ASan + UBSan) in build-fuzz/
 #        and runs each for FUZZ_RUNS inputs
@@ -63,7 +64,8 @@ twin: build
 	exit $$status
 
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) -LE realtime; status=$$?; \
+	ctest --output-on-failure -j1 -L realtime && exit $$status
 
 bench: build
 	./$(BUILD)/tests/bench/hgrasp_bench --benchmark_counters_tabular=true
