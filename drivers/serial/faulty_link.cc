@@ -2,17 +2,18 @@
 
 namespace hgrasp::drivers {
 
-FaultyLink::FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan)
-    : inner_(std::move(inner)), faults_(plan) {}
+FaultyLink::FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan,
+                       const Clock& clock)
+    : inner_(std::move(inner)), clock_(&clock), faults_(plan, clock) {}
 
-LineFaults::LineFaults(const FaultPlan& plan) : plan_(plan), rng_(plan.seed) {
-  const Clock::time_point now = Clock::now();
+LineFaults::LineFaults(const FaultPlan& plan, const Clock& clock)
+    : plan_(plan), clock_(&clock), rng_(plan.seed) {
+  const Clock::TimePoint now = clock_->Now();
   dropout_end_ = now;
   next_dropout_ = now;
   if (plan_.dropouts_per_s > 0.0) {
     std::exponential_distribution<double> gap(plan_.dropouts_per_s);
-    next_dropout_ =
-        now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(gap(rng_)));
+    next_dropout_ = now + Clock::FromSeconds(gap(rng_));
   }
 }
 
@@ -31,16 +32,13 @@ FaultCounts LineFaults::counts() const {
   return counts_;
 }
 
-bool LineFaults::InDropout(Clock::time_point now) {
+bool LineFaults::InDropout(Clock::TimePoint now) {
   if (plan_.dropouts_per_s <= 0.0) return false;
   while (now >= next_dropout_) {
-    dropout_end_ = next_dropout_ + std::chrono::duration_cast<Clock::duration>(
-                                       std::chrono::duration<double>(plan_.dropout_s));
+    dropout_end_ = next_dropout_ + Clock::FromSeconds(plan_.dropout_s);
     ++counts_.dropouts;
     std::exponential_distribution<double> gap(plan_.dropouts_per_s);
-    next_dropout_ = dropout_end_ + std::chrono::duration_cast<Clock::duration>(
-                                       std::chrono::duration<double>(plan_.min_dropout_gap_s +
-                                                                     gap(rng_)));
+    next_dropout_ = dropout_end_ + Clock::FromSeconds(plan_.min_dropout_gap_s + gap(rng_));
   }
   return now < dropout_end_;
 }
@@ -55,7 +53,7 @@ void LineFaults::Pass(std::span<const std::uint8_t> in, bool from_device,
   std::lock_guard<std::mutex> lock(mu_);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::uniform_int_distribution<int> other(1, 255), any(0, 255);
-  const bool lost = cut_ || (from_device && cut_from_device_) || InDropout(Clock::now());
+  const bool lost = cut_ || (from_device && cut_from_device_) || InDropout(clock_->Now());
   for (std::uint8_t b : in) {
     ++counts_.bytes;
     if (lost) {
@@ -84,11 +82,9 @@ device::Status FaultyLink::Write(std::span<const std::uint8_t> bytes) {
 
 device::Status FaultyLink::Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) {
   *n = 0;
-  const Clock::time_point deadline =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(std::max(timeout_s, 0.0)));
+  const Clock::TimePoint deadline = clock_->Now() + Clock::FromSeconds(std::max(timeout_s, 0.0));
   for (;;) {
-    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    const double left = Clock::ToSeconds(deadline - clock_->Now());
     // Read at most half the buffer: inserted garbage may double what comes out.
     std::vector<std::uint8_t> raw(std::max<std::size_t>(1, buf.size() / 2));
     std::size_t got = 0;
@@ -102,7 +98,7 @@ device::Status FaultyLink::Read(std::span<std::uint8_t> buf, double timeout_s, s
       std::copy(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(*n), buf.begin());
       return device::Status::kOk;
     }
-    if (Clock::now() >= deadline) return device::Status::kTimeout;
+    if (clock_->Now() >= deadline) return device::Status::kTimeout;
   }
 }
 

@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "common/clock.h"
 #include "serial/byte_link.h"
 
 namespace hgrasp::drivers {
@@ -36,10 +37,12 @@ struct FaultCounts {
 };
 
 /// The faults of one serial line, without the line: what FaultyLink does to the bytes that pass
-/// it, for any code that moves bytes itself (the twin's device end of a line). Thread-safe.
+/// it, for any code that moves bytes itself (the twin's device end of a line, SimLine). Dropouts
+/// follow `clock` (the wall clock on a real line; the SimClock of a simulated one; it must
+/// outlive this). Thread-safe.
 class LineFaults {
  public:
-  explicit LineFaults(const FaultPlan& plan);
+  explicit LineFaults(const FaultPlan& plan, const Clock& clock = Clock::Wall());
 
   /// Passes `in` through the faults into *out (appended). `from_device`: the bytes travel from
   /// the device to the host (the direction CutFromDevice cuts).
@@ -53,21 +56,22 @@ class LineFaults {
   const FaultPlan& plan() const { return plan_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
-  bool InDropout(Clock::time_point now);
+  bool InDropout(Clock::TimePoint now);
 
   FaultPlan plan_;
+  const Clock* clock_;
   mutable std::mutex mu_;
   std::mt19937_64 rng_;
   bool cut_ = false;
   bool cut_from_device_ = false;
-  Clock::time_point next_dropout_, dropout_end_;
+  Clock::TimePoint next_dropout_, dropout_end_;
   FaultCounts counts_;
 };
 
 class FaultyLink final : public ByteLink {
  public:
-  FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan);
+  FaultyLink(std::unique_ptr<ByteLink> inner, const FaultPlan& plan,
+             const Clock& clock = Clock::Wall());
 
   device::Status Write(std::span<const std::uint8_t> bytes) override;
   device::Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override;
@@ -81,9 +85,8 @@ class FaultyLink final : public ByteLink {
   FaultCounts counts() const { return faults_.counts(); }
 
  private:
-  using Clock = std::chrono::steady_clock;
-
   std::unique_ptr<ByteLink> inner_;
+  const Clock* clock_;
   LineFaults faults_;
 };
 

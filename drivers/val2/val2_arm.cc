@@ -101,25 +101,22 @@ bool ParseWhereOutput(const std::string& output, val2::WhereReport* report, bool
 
 }  // namespace
 
-Val2Arm::Val2Arm(std::unique_ptr<ByteLink> link, const Val2Options& options)
-    : link_(std::move(link)), opt_(options), start_(Clock::now()) {}
+Val2Arm::Val2Arm(std::unique_ptr<ByteLink> link, const Val2Options& options, Clock& clock)
+    : link_(std::move(link)), opt_(options), clock_(&clock), start_(clock.Now()) {}
 
 Val2Arm::CallClock Val2Arm::StartCall() const {
   CallClock c;
-  c.start = c.last_heard = Clock::now();
+  c.start = c.last_heard = clock_->Now();
   c.silence_s = opt_.silence_budget_s;
   c.max_s = opt_.max_call_s;
   return c;
 }
 
-Val2Arm::Clock::time_point Val2Arm::CallClock::Deadline() const {
-  auto d = [](double s) {
-    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-  };
-  return std::min(last_heard + d(silence_s), start + d(max_s));
+Clock::TimePoint Val2Arm::CallClock::Deadline() const {
+  return std::min(last_heard + Clock::FromSeconds(silence_s), start + Clock::FromSeconds(max_s));
 }
 
-double Val2Arm::Now() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+double Val2Arm::Now() const { return Clock::ToSeconds(clock_->Now() - start_); }
 
 // ---------------------------------------------------------------------------------------------
 // The seam.
@@ -400,8 +397,9 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
   bool cancel_trace = false, execution_trace = false, message_trace = false;
   int suspect = 0;  // ^R answers near the line but not it, in a row
   int errors = 0;   // lines that ran with "not understood"
+  bool gone_once = false;  // the line was found gone at the last turn, with no trace of a run
   for (;;) {
-    if (Clock::now() >= call->Deadline()) {
+    if (clock_->Now() >= call->Deadline()) {
       if (state_changing && armed) pending_ = line;
       if (opt_.trace) opt_.trace("timeout; armed " + std::to_string(armed));
       return Status::kTimeout;
@@ -411,25 +409,43 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
     double timeout = opt_.reply_timeout_s;
     bool probe_again = false;
     const bool armed_before = armed;
+    const bool gone_again = gone_once;
+    gone_once = false;
+    // The line has left the controller's input. Not when a retype shows the start of the line:
+    // a line that ran leaves the input empty, so that is a retype cut short by a dropout (bug
+    // fix, found by a simulated line's seed: "^R" damaged on its way back and cut short read as
+    // a run, and the command was reported done and lost).
+    const bool gone = known_ && Gone(buf_, line) && !(!RTrim(buf_).empty() && StartsWith(line, buf_));
     if (!known_) {
       send = val2::kCtrlR;  // what does the controller hold?
       ++counters_.probes;
       if (armed && std::find(guesses_.begin(), guesses_.end(), line) == guesses_.end()) {
         guesses_.push_back(line);
       }
-    } else if (armed && Gone(buf_, line) && cancel_trace && !execution_trace && !check_motion) {
+    } else if (armed && gone && cancel_trace && !execution_trace && !check_motion) {
       armed = false;  // gone, and the answers show a cancel and no execution: it did not run
       continue;
-    } else if (armed && Gone(buf_, line) && message_trace && !check_motion) {
+    } else if (armed && gone && message_trace && !check_motion) {
       // Gone, and an answer too damaged to classify held a message: the line that ran printed
       // it, so it was not the command (which runs silently; a CR damaged into a character had
       // left it with a character more) or the command refused. It did not take effect: typed
       // again. (Taken as the command's silent run, the command was reported done and lost.)
       armed = false;
       continue;
-    } else if (armed && Gone(buf_, line)) {
-      // The line has left the controller's input: it ran, and its answer was lost. (A line
-      // that never ran is still there, give or take a corrupted byte or two.)
+    } else if (armed && gone && state_changing && !execution_trace && !gone_again) {
+      // Gone with no trace of a run: the line ran with its answer lost, or a retype's answer
+      // was cut short by a dropout after its prompt ("^R" CR LF "." is also the retype of an
+      // empty line). Ask once more before taking it as run. (Bug fix, found by a simulated
+      // line's seed: the ^R that checks a typed command before its CR came back cut short; the
+      // driver took the command as run, reported it done, and cancelled it on the next call.)
+      gone_once = true;
+      send = val2::kCtrlR;
+      expected = val2::RetypeEcho("");
+      ++counters_.probes;
+    } else if (armed && gone) {
+      // The line has left the controller's input (seen twice, or with a trace of a run): it
+      // ran, and its answer was lost. (A line that never ran is still there, give or take a
+      // corrupted byte or two.)
       if (!state_changing) {
         armed = false;  // WHERE: just ask again
         continue;
@@ -439,7 +455,7 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
         // the same, and so do the traces of damaged answers. The arm rested and the move is
         // visible: WHERE tells, whatever the traces.
         bool moved = false;
-        const Status ms = MovedFromRest(Clock::now(), *check_motion, call, &moved);
+        const Status ms = MovedFromRest(clock_->Now(), *check_motion, call, &moved);
         if (ms != Status::kOk) {
           pending_ = line;  // a retry resumes it, and checks again
           return ms;
@@ -509,7 +525,9 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       cancel_trace = execution_trace = message_trace = false;  // armed just now
     }
     const Status s = Step(send, expected, timeout, call, &r, &ran);
-    if (armed) {
+    // The second look at a line found gone only asks whether it is still there: a damaged
+    // answer to it ("^R" CR LF "." one byte off is a cancel's echo) is no trace of a cancel.
+    if (armed && !gone_once) {
       cancel_trace |= saw_cancel_;
       execution_trace |= saw_execution_;
       message_trace |= saw_message_;
@@ -528,7 +546,7 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
     // cancel's echo, "^U" CR LF ".", differ in one byte). When the command may have run before,
     // the cancel does not say whether it did: for a move from rest WHERE tells (the line is gone,
     // below); otherwise it is taken as not run.
-    if (r.kind == Reaction::Kind::kCancel && !(armed && check_motion)) armed = false;
+    if (r.kind == Reaction::Kind::kCancel && !(armed && check_motion) && !gone_once) armed = false;
     if (r.kind != Reaction::Kind::kExecuted) continue;
 
     // A line ran. Only the command itself (no part of it is a command; a damaged one is not a
@@ -571,13 +589,13 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
   }
 }
 
-Status Val2Arm::MovedFromRest(Clock::time_point since, const Motion& motion, CallClock* call,
+Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, CallClock* call,
                               bool* moved) {
   *moved = false;
   int on_way = 0, short_of = 0;  // reports in a row
   for (;;) {
     // The controller reads the joints when the WHERE runs, after it was asked.
-    const Clock::time_point asked = Clock::now();
+    const Clock::TimePoint asked = clock_->Now();
     val2::WhereReport report;
     double t = 0.0;
     bool located = false;
@@ -598,7 +616,7 @@ Status Val2Arm::MovedFromRest(Clock::time_point since, const Motion& motion, Cal
       return Status::kOk;
     }
     if (short_of >= 2 &&
-        std::chrono::duration<double>(asked - since).count() >= opt_.motion_start_s) {
+        Clock::ToSeconds(asked - since) >= opt_.motion_start_s) {
       return Status::kOk;
     }
   }
@@ -609,7 +627,7 @@ Status Val2Arm::Dispose(const std::string& pending, CallClock* call, bool* execu
   bool armed = true;  // the pending line may be complete in the controller, or have run
   bool cancel_trace = false, execution_trace = false, message_trace = false;
   for (;;) {
-    if (Clock::now() >= call->Deadline()) return Status::kTimeout;
+    if (clock_->Now() >= call->Deadline()) return Status::kTimeout;
     std::string send;
     std::string expected;
     if (!known_) {
@@ -813,20 +831,19 @@ Status Val2Arm::ReadAnswer(const Expect& want, double first_byte_timeout_s, Call
   std::uint8_t buf[512];
   double wait = first_byte_timeout_s;
   for (;;) {
-    const double left = std::chrono::duration<double>(call->Deadline() - Clock::now()).count();
+    const double left = Clock::ToSeconds(call->Deadline() - clock_->Now());
     const double t = std::max(0.0, std::min(wait, left));
     std::size_t n = 0;
     const Status s = link_->Read(buf, t, &n);
     if (s == Status::kDisconnected) return s;
     if (s != Status::kOk || n == 0) {
       if (answer->empty() && !silent_since_) {
-        silent_since_ = Clock::now() - std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(t));
+        silent_since_ = clock_->Now() - Clock::FromSeconds(t);
       }
       return Status::kOk;  // quiet: the answer (perhaps none) is complete
     }
     silent_since_.reset();
-    call->last_heard = Clock::now();
+    call->last_heard = clock_->Now();
     answer->append(reinterpret_cast<const char*>(buf), n);
     if (answer->size() > 4096) return Status::kOk;
     // A retype has no end mark. It is complete only when the line goes quiet: an answer as
@@ -875,7 +892,7 @@ void Val2Arm::Ran(const std::string& line, bool inferred) {
 Status Val2Arm::Fail(Status s) {
   if (s == Status::kDisconnected) lost_ = true;
   if (silent_since_ &&
-      std::chrono::duration<double>(Clock::now() - *silent_since_).count() >= opt_.link_lost_s) {
+      Clock::ToSeconds(clock_->Now() - *silent_since_) >= opt_.link_lost_s) {
     lost_ = true;
   }
   if (lost_ && s == Status::kTimeout) {

@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.h"
 #include "device/arm.h"
 #include "serial/byte_link.h"
 #include "serial/command_log.h"
@@ -111,11 +112,15 @@ class Val2Arm final : public device::Arm {
  public:
   /// `link`: the controller's console line (a SerialPort at 9600 8N1, or a FaultyLink over
   /// one). The controller must be at the VAL II monitor's "." prompt (calibrated, arm power on).
-  explicit Val2Arm(std::unique_ptr<ByteLink> link, const Val2Options& options = {});
+  /// `clock`: every time the driver reads and every wait it times (the link's own Read waits
+  /// on the link's clock, the same one): the wall clock on a real robot, a SimClock in
+  /// simulated time (must outlive the driver).
+  explicit Val2Arm(std::unique_ptr<ByteLink> link, const Val2Options& options = {},
+                   Clock& clock = Clock::Wall());
 
   /// WHERE: joint angles (rad), rates estimated from the previous Read (rad/s), and `moving`
   /// when the joints changed since the previous Read or a motion was commanded since. t_s is
-  /// the host's clock (s since construction): VAL prints no time.
+  /// the driver's clock (s since construction): VAL prints no time.
   device::Status Read(device::ArmState* state) override;
   /// DO MOVE #PPOINT(JT1..JT6): joint angles in degrees, the URDF's angles one for one.
   device::Status MoveJoints(const device::Joint6& q_target) override;
@@ -152,8 +157,6 @@ class Val2Arm final : public device::Arm {
   bool link_lost() const { return lost_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
-
   /// Outcome of driving one command line.
   struct LineOutcome {
     bool executed = false;     ///< the line ran (once)
@@ -165,9 +168,9 @@ class Val2Arm final : public device::Arm {
   /// The time limits of one call: it ends when the controller has been silent for
   /// silence_budget_s, or after max_call_s.
   struct CallClock {
-    Clock::time_point start, last_heard;
+    Clock::TimePoint start, last_heard;
     double silence_s = 0.45, max_s = 5.0;
-    Clock::time_point Deadline() const;
+    Clock::TimePoint Deadline() const;
   };
 
   CallClock StartCall() const;
@@ -194,7 +197,7 @@ class Val2Arm final : public device::Arm {
   /// Whether the arm has left the rest of the last Read on its way to `motion` (see moved_deg):
   /// WHERE until two reports in a row show it on its way (*moved), or two in a row, the second
   /// asked motion_start_s after `since`, show it not.
-  device::Status MovedFromRest(Clock::time_point since, const Motion& motion, CallClock* call,
+  device::Status MovedFromRest(Clock::TimePoint since, const Motion& motion, CallClock* call,
                                bool* moved);
   /// One WHERE report, parsed: the joints always; the location when `located` says so.
   device::Status Where(CallClock* call, val2::WhereReport* report, double* t_s,
@@ -237,7 +240,8 @@ class Val2Arm final : public device::Arm {
 
   std::unique_ptr<ByteLink> link_;
   Val2Options opt_;
-  Clock::time_point start_;
+  Clock* clock_;
+  Clock::TimePoint start_;
 
   // What the driver believes the monitor's input line holds.
   bool known_ = false;
@@ -252,7 +256,7 @@ class Val2Arm final : public device::Arm {
 
   bool lost_ = false;        // link lost: recover before anything else
   bool needs_read_ = false;  // after a recovery: motion refused until a Read succeeds
-  std::optional<Clock::time_point> silent_since_;
+  std::optional<Clock::TimePoint> silent_since_;
 
   // Previous Read, for the rates and `moving`.
   bool have_prev_ = false;

@@ -1,4 +1,5 @@
-// Val2Arm against the emulated VAL II controller over a real pty (EmulatorHost + SerialPort):
+// Val2Arm against the emulated VAL II controller on a simulated 9600-baud line (SimLine, in
+// simulated time; over a real pty in val2_pty_test.cc):
 // every command of the device::Arm seam, checked on the emulator's model and on the driver's
 // readings; and the emulator's arm model on its own (speed limits, coordinated motion).
 
@@ -11,7 +12,7 @@
 #include <thread>
 
 #include "emulators/val2_emulator.h"
-#include "serial/serial_port.h"
+#include "emulators/sim_line.h"
 #include "tests/drivers/val2/val2_test_util.h"
 
 namespace hgrasp::drivers {
@@ -20,14 +21,11 @@ namespace {
 using device::Joint6;
 using device::Status;
 
-// An emulated controller on a pty and the driver on the pty's other end.
+// An emulated controller on a simulated line and the driver on its other end.
 struct Rig {
   explicit Rig(std::unique_ptr<Val2Emulator> emulator = MakeVal2Emulator())
-      : host(std::move(emulator)) {
-    std::string error;
-    auto port = SerialPort::Open({host.port(), 9600}, &error);
-    EXPECT_TRUE(port) << error;
-    arm = std::make_unique<Val2Arm>(std::move(port));
+      : host(clock, std::move(emulator), 9600) {
+    arm = std::make_unique<Val2Arm>(host.Open(), Val2Options{}, clock);
   }
   template <class F>
   auto Emu(F f) {
@@ -43,17 +41,18 @@ struct Rig {
   // Reads until the driver reports the arm at rest (two equal readings).
   device::ArmState WaitStill(double timeout_s = 15.0) {
     device::ArmState s;
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < end) {
+    const Clock::TimePoint end = clock.Now() + Clock::FromSeconds(timeout_s);
+    while (clock.Now() < end) {
       EXPECT_EQ(arm->Read(&s), Status::kOk);
       if (!s.moving) return s;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      clock.SleepFor(0.02);
     }
     ADD_FAILURE() << "the arm did not come to rest";
     return s;
   }
 
-  EmulatorHost host;
+  SimClock clock;
+  SimLine host;
   std::unique_ptr<Val2Arm> arm;
 };
 
@@ -95,7 +94,7 @@ TEST(Val2Arm, ReadingsFollowTheMotion) {
     // The reading is not ahead of the model now (it moves on), within the printed 0.001 deg.
     EXPECT_LE(s.q[0], q[0] + DegToRad(0.0005) + 1e-12);
     if (s.moving && s.qd[0] > 0.0) saw_moving = true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    rig.clock.SleepFor(0.01);
   }
   EXPECT_TRUE(saw_moving);
   rig.WaitStill();
@@ -145,7 +144,7 @@ TEST(Val2Arm, SetSpeedScalesTheJointSpeeds) {
   double peak = 0.0;
   for (int n = 0; n < 300; ++n) {
     peak = std::max(peak, rig.Emu([](Val2Emulator& e) { return std::abs(e.model().qd()[0]); }));
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    rig.clock.SleepFor(0.005);
   }
   EXPECT_NEAR(RadToDeg(peak), 30.0, 0.5);
   EXPECT_EQ(rig.Executed()[0], "SPEED (25.00)");
@@ -156,7 +155,7 @@ TEST(Val2Arm, StopHoldsTheArmWhereItIs) {
   ASSERT_EQ(rig.arm->SetSpeed(0.1), Status::kOk);
   const Joint6 target = Deg({80, -60, 30, 0, -45, 0});
   ASSERT_EQ(rig.arm->MoveJoints(target), Status::kOk);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  rig.clock.SleepFor(0.3);
   ASSERT_EQ(rig.arm->Stop(), Status::kOk);
   const device::ArmState s = rig.WaitStill();
   EXPECT_GT(s.q[0], DegToRad(0.5));

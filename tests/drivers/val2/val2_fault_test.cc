@@ -1,4 +1,5 @@
-// Val2Arm under faults, against the emulated VAL II controller on a real pty:
+// Val2Arm under faults, against the emulated VAL II controller on a simulated 9600-baud line
+// (SimLine, in simulated time: every run of a case is the same run, whatever the machine's load):
 //  - 1000 commands through a FaultyLink (1 % of bytes corrupted each way, 0.5 dropouts/s of
 //    200 ms): all complete, and the controller's log of executed commands is exactly the
 //    commanded sequence (none lost, duplicated or altered);
@@ -6,7 +7,7 @@
 //  - a cut link reported within 0.5 s, and recovery;
 //  - a link lost for longer than link_lost_s: the arm is stopped on reconnection and motion is
 //    refused until a Read;
-//  - the port vanishing and coming back.
+//  - the port vanishing and coming back (the real pty's in val2_pty_test.cc).
 
 #include <gtest/gtest.h>
 
@@ -22,7 +23,7 @@
 
 #include "emulators/val2_emulator.h"
 #include "serial/faulty_link.h"
-#include "serial/serial_port.h"
+#include "emulators/sim_line.h"
 #include "tests/drivers/val2/val2_test_util.h"
 #include "val2/val2_arm.h"
 
@@ -31,13 +32,9 @@ namespace {
 
 using device::Joint6;
 using device::Status;
-using Clock = std::chrono::steady_clock;
+double Since(const Clock& clock, Clock::TimePoint t0) { return Clock::ToSeconds(clock.Now() - t0); }
 
-double Since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-std::vector<std::string> Executed(EmulatorHost& host) {
+std::vector<std::string> Executed(SimLine& host) {
   return host.With([](DeviceEmulator& d) {
     std::vector<std::string> lines;
     for (const Val2Executed& x : dynamic_cast<Val2Emulator&>(d).executed()) lines.push_back(x.line);
@@ -45,17 +42,11 @@ std::vector<std::string> Executed(EmulatorHost& host) {
   });
 }
 
-std::unique_ptr<SerialPort> OpenPort(const std::string& path) {
-  std::string error;
-  auto port = SerialPort::Open({path, 9600}, &error);
-  EXPECT_TRUE(port) << error;
-  return port;
-}
-
 // ---------------------------------------------------------------------------------------------
 
 TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
-  EmulatorHost host(MakeVal2Emulator());
+  SimClock clock;
+  SimLine host(clock, MakeVal2Emulator(), 9600);
   FaultPlan plan;
   plan.corrupt_probability = 0.01;
   plan.dropouts_per_s = 0.5;
@@ -64,14 +55,14 @@ TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
   // VAL2_FAULT_SEED / VAL2_FAULT_GARBAGE: other seeds, and inserted garbage, for soak runs.
   if (const char* e = std::getenv("VAL2_FAULT_SEED")) plan.seed = std::strtoull(e, nullptr, 10);
   if (const char* e = std::getenv("VAL2_FAULT_GARBAGE")) plan.garbage_probability = std::atof(e);
-  auto faulty_owned = std::make_unique<FaultyLink>(OpenPort(host.port()), plan);
+  auto faulty_owned = std::make_unique<FaultyLink>(host.Open(), plan, clock);
   FaultyLink* faulty = faulty_owned.get();
   Val2Options options;
   std::vector<std::string> trace;  // the last exchanges, printed when the log differs
   if (std::getenv("VAL2_TRACE")) {
     options.trace = [&trace](const std::string& t) { trace.push_back(t); };
   }
-  Val2Arm arm(std::move(faulty_owned), options);
+  Val2Arm arm(std::move(faulty_owned), options, clock);
 
   // A deterministic mix with distinct values: joint moves about the start pose, small relative
   // moves, speeds, stops, and reads.
@@ -80,7 +71,7 @@ TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
   std::vector<int> expected_command;  // the index of each expected entry's command
   int failures = 0, reads = 0, max_attempts = 0;
   std::map<Status, int> failure_kinds;
-  const Clock::time_point t0 = Clock::now();
+  const Clock::TimePoint t0 = clock.Now();
   for (int i = 0; i < 1000; ++i) {
     std::function<Status()> call;
     std::string line;
@@ -157,7 +148,7 @@ TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
       expected_command.push_back(i);
     }
   }
-  const double elapsed = Since(t0);
+  const double elapsed = Since(clock, t0);
   const FaultCounts fc = faulty->counts();
   const Val2Counters& c = arm.counters();
   std::printf(
@@ -214,13 +205,14 @@ TEST(Val2Faults, ThousandCommandsWithCorruptionAndDropouts) {
 
 TEST(Val2Faults, ConfirmedReadsAreRightUnderCorruption) {
   // A digit corrupted into another digit passes any parse; confirm_reads catches it.
-  EmulatorHost host(MakeVal2Emulator());
+  SimClock clock;
+  SimLine host(clock, MakeVal2Emulator(), 9600);
   FaultPlan plan;
   plan.corrupt_probability = 0.01;
   plan.seed = 77;
   Val2Options options;
   options.confirm_reads = true;
-  Val2Arm arm(std::make_unique<FaultyLink>(OpenPort(host.port()), plan), options);
+  Val2Arm arm(std::make_unique<FaultyLink>(host.Open(), plan, clock), options, clock);
   const Joint6 truth =
       host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).model().q(); });
   int wrong = 0;
@@ -243,7 +235,8 @@ TEST(Val2Faults, ConfirmedReadsAreRightUnderCorruption) {
 // the driver writes (with or without that CR, or with the CR damaged into another byte).
 class CrLoser final : public ByteLink {
  public:
-  explicit CrLoser(std::unique_ptr<ByteLink> inner) : inner_(std::move(inner)) {}
+  CrLoser(std::unique_ptr<ByteLink> inner, const Clock& clock)
+      : inner_(std::move(inner)), clock_(clock) {}
   void Arm(bool lose_the_cr, double lose_s, std::optional<std::uint8_t> cr_as = std::nullopt) {
     armed_ = true;
     lose_cr_ = lose_the_cr;
@@ -253,8 +246,7 @@ class CrLoser final : public ByteLink {
   Status Write(std::span<const std::uint8_t> bytes) override {
     if (armed_ && std::find(bytes.begin(), bytes.end(), '\r') != bytes.end()) {
       armed_ = false;
-      until_ = Clock::now() +
-               std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(lose_s_));
+      until_ = clock_.Now() + Clock::FromSeconds(lose_s_);
       if (lose_cr_) return Status::kOk;
       if (cr_as_) {
         std::vector<std::uint8_t> damaged(bytes.begin(), bytes.end());
@@ -263,16 +255,15 @@ class CrLoser final : public ByteLink {
       }
       return inner_->Write(bytes);
     }
-    if (Clock::now() < until_) return Status::kOk;
+    if (clock_.Now() < until_) return Status::kOk;
     return inner_->Write(bytes);
   }
   Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
-    const Clock::time_point end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                     std::chrono::duration<double>(timeout_s));
+    const Clock::TimePoint end = clock_.Now() + Clock::FromSeconds(timeout_s);
     for (;;) {
-      const double left = std::chrono::duration<double>(end - Clock::now()).count();
+      const double left = Clock::ToSeconds(end - clock_.Now());
       const Status s = inner_->Read(buf, std::max(0.0, left), n);
-      if (s != Status::kOk || Clock::now() >= until_) return s;
+      if (s != Status::kOk || clock_.Now() >= until_) return s;
       *n = 0;  // lost
       if (left <= 0.0) return Status::kTimeout;
     }
@@ -281,10 +272,11 @@ class CrLoser final : public ByteLink {
 
  private:
   std::unique_ptr<ByteLink> inner_;
+  const Clock& clock_;
   bool armed_ = false, lose_cr_ = false;
   double lose_s_ = 0.0;
   std::optional<std::uint8_t> cr_as_;
-  Clock::time_point until_{};
+  Clock::TimePoint until_{};
 };
 
 // A ByteLink that, once armed, changes one digit of the next `reports` WHERE reports: the units
@@ -328,8 +320,8 @@ class JointDigitFlip final : public ByteLink {
 
 struct LossRig {
   explicit LossRig(std::unique_ptr<Val2Emulator> emulator = MakeVal2Emulator())
-      : host(std::move(emulator)) {
-    auto loser_owned = std::make_unique<CrLoser>(OpenPort(host.port()));
+      : host(clock, std::move(emulator), 9600) {
+    auto loser_owned = std::make_unique<CrLoser>(host.Open(), clock);
     loser = loser_owned.get();
     auto flip_owned = std::make_unique<JointDigitFlip>(std::move(loser_owned));
     flip = flip_owned.get();
@@ -337,9 +329,10 @@ struct LossRig {
     if (std::getenv("VAL2_TRACE")) {
       options.trace = [](const std::string& t) { std::fprintf(stderr, "%s\n", t.c_str()); };
     }
-    arm = std::make_unique<Val2Arm>(std::move(flip_owned), options);
+    arm = std::make_unique<Val2Arm>(std::move(flip_owned), options, clock);
   }
-  EmulatorHost host;
+  SimClock clock;
+  SimLine host;
   CrLoser* loser;
   JointDigitFlip* flip;
   std::unique_ptr<Val2Arm> arm;
@@ -354,7 +347,7 @@ TEST(Val2Faults, LostAnswerToTheCrThenRetry) {
   rig.loser->Arm(/*lose_the_cr=*/false, 0.7);  // the CR runs the command; its answer is lost
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
   EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  rig.clock.SleepFor(0.3);
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);  // the retry finds it done
   EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kA)});
   EXPECT_EQ(rig.arm->counters().resolved_retries, 1);
@@ -364,7 +357,7 @@ TEST(Val2Faults, LostCrThenRetry) {
   LossRig rig;
   rig.loser->Arm(/*lose_the_cr=*/true, 0.7);  // the CR never arrives: the line waits, unrun
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  rig.clock.SleepFor(0.3);
   EXPECT_TRUE(Executed(rig.host).empty());
   EXPECT_EQ(
       rig.host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).input_line(); }),
@@ -377,7 +370,7 @@ TEST(Val2Faults, LostAnswerThenReadThenRetry) {
   LossRig rig;
   rig.loser->Arm(false, 0.7);
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  rig.clock.SleepFor(0.3);
   device::ArmState s;
   EXPECT_EQ(rig.arm->Read(&s), Status::kOk);        // finds the command executed
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);  // its retry: not sent again
@@ -390,7 +383,7 @@ TEST(Val2Faults, LostCrThenAnotherCommandCancelsIt) {
   LossRig rig;
   rig.loser->Arm(true, 0.7);
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kTimeout);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  rig.clock.SleepFor(0.3);
   EXPECT_EQ(rig.arm->MoveJoints(kB), Status::kOk);  // not the retry: A must not run now
   EXPECT_EQ(Executed(rig.host), std::vector<std::string>{Line(kB)});
   EXPECT_EQ(rig.arm->counters().cancelled_pending, 1);
@@ -505,8 +498,10 @@ std::unique_ptr<Val2Emulator> Creeping(double deg_per_s) {
 
 // Bug fix: an arm at rest that creeps (0.025 deg/s, 0.007 deg between two reads) passed, over the
 // check's second report, the 0.01 deg that counted as motion: a cancelled move was taken as run.
+// (On the old unpaced pty a read took milliseconds and the case crept at 0.1 deg/s; at 9600 baud
+// a read takes 0.28 s, and 0.1 deg/s is 0.028 deg between two reads: never at rest.)
 TEST(Val2Faults, AnArmCreepingAtRestIsNoMotion) {
-  LossRig rig(Creeping(0.1));
+  LossRig rig(Creeping(0.025));
   Rest(rig);
   rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
   EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);
@@ -581,13 +576,14 @@ TEST(Val2Faults, LostAnswersOfToolMovesAreSettledAlongTheToolsPath) {
 // rest whose location never came through twice is judged by the joints' travel in any
 // direction, which creep over a long check can pass (see PROTOCOL.md).
 TEST(Val2Faults, LostAnswersOfMovesFromRestAreSettledUnderCorruption) {
-  EmulatorHost host(MakeVal2Emulator());
+  SimClock clock;
+  SimLine host(clock, MakeVal2Emulator(), 9600);
   FaultPlan plan;
   plan.corrupt_probability = 0.01;
   plan.seed = 77;
   if (const char* e = std::getenv("VAL2_FAULT_SEED")) plan.seed = std::strtoull(e, nullptr, 10);
   auto loser_owned =
-      std::make_unique<CrLoser>(std::make_unique<FaultyLink>(OpenPort(host.port()), plan));
+      std::make_unique<CrLoser>(std::make_unique<FaultyLink>(host.Open(), plan, clock), clock);
   CrLoser* loser = loser_owned.get();
   Val2Options options;
   std::vector<std::string> trace;  // printed around the first difference when VAL2_TRACE is set
@@ -595,7 +591,7 @@ TEST(Val2Faults, LostAnswersOfMovesFromRestAreSettledUnderCorruption) {
   if (std::getenv("VAL2_TRACE")) {
     options.trace = [&trace](const std::string& t) { trace.push_back(t); };
   }
-  Val2Arm arm(std::move(loser_owned), options);
+  Val2Arm arm(std::move(loser_owned), options, clock);
   const std::array<double, 6> base = {0.0, -60.0, 30.0, 0.0, -45.0, 0.0};
   std::vector<std::string> expected;
   int lost = 0, cancelled = 0;
@@ -605,7 +601,7 @@ TEST(Val2Faults, LostAnswersOfMovesFromRestAreSettledUnderCorruption) {
     for (int k = 0; k < 2000 && host.With([](DeviceEmulator& d) {
            return dynamic_cast<Val2Emulator&>(d).model().moving();
          }); ++k) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      clock.SleepFor(0.005);
     }
     device::ArmState state;
     int reads = 0;
@@ -718,10 +714,11 @@ class DoubledCharacter final : public ByteLink {
 // ran the longer line, and the rest of the retype, read with the CR's answer, hid it. The check
 // reads the retype until the line goes quiet: the extra character is rubbed out first.
 TEST(Val2Faults, ACharacterMoreOnTheLineIsRubbedOutBeforeTheCr) {
-  EmulatorHost host(MakeVal2Emulator());
-  auto link = std::make_unique<DoubledCharacter>(OpenPort(host.port()));
+  SimClock clock;
+  SimLine host(clock, MakeVal2Emulator(), 9600);
+  auto link = std::make_unique<DoubledCharacter>(host.Open());
   DoubledCharacter* doubled = link.get();
-  Val2Arm arm(std::move(link));
+  Val2Arm arm(std::move(link), Val2Options{}, clock);
   Pose3 delta = Pose3::Identity();
   delta.translate(Eigen::Vector3d(0.002, -0.001, 0.003));
   const std::string line = val2::Encode(val2::MoveRelativeCommand(val2::PoseToTrans(delta)));
@@ -736,10 +733,11 @@ TEST(Val2Faults, ACharacterMoreOnTheLineIsRubbedOutBeforeTheCr) {
 // Cut link, lost link, vanished port.
 
 TEST(Val2Faults, CutLinkReportedWithinHalfASecondAndRecovered) {
-  EmulatorHost host(MakeVal2Emulator());
-  auto faulty_owned = std::make_unique<FaultyLink>(OpenPort(host.port()), FaultPlan{});
+  SimClock clock;
+  SimLine host(clock, MakeVal2Emulator(), 9600);
+  auto faulty_owned = std::make_unique<FaultyLink>(host.Open(), FaultPlan{}, clock);
   FaultyLink* faulty = faulty_owned.get();
-  Val2Arm arm(std::move(faulty_owned));
+  Val2Arm arm(std::move(faulty_owned), Val2Options{}, clock);
   device::ArmState s;
   ASSERT_EQ(arm.Read(&s), Status::kOk);
   ASSERT_EQ(arm.MoveJoints(kA), Status::kOk);
@@ -747,9 +745,9 @@ TEST(Val2Faults, CutLinkReportedWithinHalfASecondAndRecovered) {
   faulty->Cut(true);
   for (auto call : std::vector<std::function<Status()>>{[&] { return arm.MoveJoints(kB); },
                                                         [&] { return arm.Read(&s); }}) {
-    const Clock::time_point t0 = Clock::now();
+    const Clock::TimePoint t0 = clock.Now();
     const Status st = call();
-    const double dt = Since(t0);
+    const double dt = Since(clock, t0);
     std::printf("[ cut      ] reported %s after %.3f s\n",
                 std::string(device::ToString(st)).c_str(), dt);
     EXPECT_TRUE(st == Status::kTimeout || st == Status::kDisconnected);
@@ -763,22 +761,23 @@ TEST(Val2Faults, CutLinkReportedWithinHalfASecondAndRecovered) {
 }
 
 TEST(Val2Faults, LostLinkStopsTheArmOnReconnection) {
-  EmulatorHost host(MakeVal2Emulator());
-  auto faulty_owned = std::make_unique<FaultyLink>(OpenPort(host.port()), FaultPlan{});
+  SimClock clock;
+  SimLine host(clock, MakeVal2Emulator(), 9600);
+  auto faulty_owned = std::make_unique<FaultyLink>(host.Open(), FaultPlan{}, clock);
   FaultyLink* faulty = faulty_owned.get();
-  Val2Arm arm(std::move(faulty_owned));
+  Val2Arm arm(std::move(faulty_owned), Val2Options{}, clock);
   ASSERT_EQ(arm.SetSpeed(0.05), Status::kOk);
   const Joint6 far = Deg({60, -60, 30, 0, -45, 0});
   ASSERT_EQ(arm.MoveJoints(far), Status::kOk);
 
   faulty->Cut(true);
   device::ArmState s;
-  const Clock::time_point t0 = Clock::now();
-  while (Since(t0) < 1.6) {
-    const Clock::time_point t1 = Clock::now();
+  const Clock::TimePoint t0 = clock.Now();
+  while (Since(clock, t0) < 1.6) {
+    const Clock::TimePoint t1 = clock.Now();
     const Status st = arm.Read(&s);
     EXPECT_NE(st, Status::kOk);
-    EXPECT_LT(Since(t1), 0.5);
+    EXPECT_LT(Since(clock, t1), 0.5);
   }
   EXPECT_TRUE(arm.link_lost());
   // VAL goes on with its motion while the host is away.
@@ -789,7 +788,7 @@ TEST(Val2Faults, LostLinkStopsTheArmOnReconnection) {
   EXPECT_EQ(arm.MoveJoints(kB), Status::kDisconnected);
   EXPECT_FALSE(arm.link_lost());
   EXPECT_EQ(arm.counters().safety_aborts, 1);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  clock.SleepFor(0.3);
   EXPECT_FALSE(
       host.With([](DeviceEmulator& d) { return dynamic_cast<Val2Emulator&>(d).model().moving(); }));
   const double j1 =
@@ -803,35 +802,35 @@ TEST(Val2Faults, LostLinkStopsTheArmOnReconnection) {
 }
 
 TEST(Val2Faults, PortVanishesAndComesBack) {
-  const std::string link = ::testing::TempDir() + "hgrasp_val2_fault_link";
-  EmulatorHost host(MakeVal2Emulator(), link);
-  Val2Arm arm(OpenPort(link));
+  SimClock clock;
+  SimLine host(clock, MakeVal2Emulator(), 9600);
+  Val2Arm arm(host.Open(), Val2Options{}, clock);
   device::ArmState s;
   ASSERT_EQ(arm.Read(&s), Status::kOk);
   ASSERT_EQ(arm.MoveJoints(kA), Status::kOk);
 
   host.Vanish();
-  const Clock::time_point t0 = Clock::now();
+  const Clock::TimePoint t0 = clock.Now();
   const Status st = arm.MoveJoints(kB);
   std::printf("[ vanish   ] reported %s after %.3f s\n", std::string(device::ToString(st)).c_str(),
-              Since(t0));
+              Since(clock, t0));
   EXPECT_EQ(st, Status::kDisconnected);
-  EXPECT_LT(Since(t0), 0.5);
+  EXPECT_LT(Since(clock, t0), 0.5);
   EXPECT_TRUE(arm.link_lost());
-  const Clock::time_point t1 = Clock::now();
+  const Clock::TimePoint t1 = clock.Now();
   EXPECT_EQ(arm.Read(&s), Status::kDisconnected);
-  EXPECT_LT(Since(t1), 0.5);
+  EXPECT_LT(Since(clock, t1), 0.5);
 
   host.Reappear();
-  // The driver reopens the same path on its own.
+  // The driver carries on over the port that came back.
   Status r = Status::kDisconnected;
-  const Clock::time_point t2 = Clock::now();
-  while (r != Status::kOk && Since(t2) < 2.0) {
+  const Clock::TimePoint t2 = clock.Now();
+  while (r != Status::kOk && Since(clock, t2) < 2.0) {
     r = arm.Read(&s);
-    if (r != Status::kOk) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (r != Status::kOk) clock.SleepFor(0.01);
   }
   ASSERT_EQ(r, Status::kOk);
-  std::printf("[ vanish   ] back after %.3f s\n", Since(t2));
+  std::printf("[ vanish   ] back after %.3f s\n", Since(clock, t2));
   EXPECT_EQ(arm.MoveJoints(kB), Status::kOk);
   EXPECT_EQ(Executed(host), (std::vector<std::string>{Line(kA), "ABORT", Line(kB)}));
 }
