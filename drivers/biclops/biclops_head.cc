@@ -20,9 +20,7 @@ constexpr const char* kAxisNames[3] = {"pan", "tilt", "verge"};
 
 double Deg(double deg) { return deg * kPi / 180.0; }
 
-double Seconds(std::chrono::steady_clock::duration d) {
-  return std::chrono::duration<double>(d).count();
-}
+double Seconds(Clock::Duration d) { return Clock::ToSeconds(d); }
 
 std::string Text(double v) {
   std::ostringstream s;
@@ -68,8 +66,9 @@ BiclopsOptions DefaultBiclopsOptions() {
   return o;
 }
 
-BiclopsHead::BiclopsHead(std::unique_ptr<ByteLink> link, const BiclopsOptions& options)
-    : link_(std::move(link)), options_(options) {
+BiclopsHead::BiclopsHead(std::unique_ptr<ByteLink> link, const BiclopsOptions& options,
+                         Clock& clock)
+    : link_(std::move(link)), options_(options), clock_(&clock) {
   HGRASP_DEMAND_MSG(link_ != nullptr, "BiclopsHead needs a link");
   for (int a = 0; a < 3; ++a) {
     const BiclopsAxisOptions& x = options_.axes[Index(a)];
@@ -138,7 +137,7 @@ BiclopsHead::BiclopsHead(std::unique_ptr<ByteLink> link, const BiclopsOptions& o
           "0 s or more");
   Require(options_.stop_settle_s > 0.0, "stop_settle_s", options_.stop_settle_s,
           "a positive time (s)");
-  created_ = call_start_ = last_rx_ = Clock::now();
+  created_ = call_start_ = last_rx_ = clock_->Now();
 }
 
 BiclopsCounters BiclopsHead::counters() const {
@@ -160,13 +159,13 @@ std::array<std::int32_t, 3> BiclopsHead::ToCounts(const device::HeadJoints& targ
 // Link level
 
 void BiclopsHead::BeginCall() {
-  call_start_ = Clock::now();
+  call_start_ = clock_->Now();
   silent_ = false;
 }
 
 double BiclopsHead::SilenceLeft() const {
-  const Clock::time_point since = std::max(call_start_, last_rx_);
-  return options_.silence_timeout_s - Seconds(Clock::now() - since);
+  const Clock::TimePoint since = std::max(call_start_, last_rx_);
+  return options_.silence_timeout_s - Seconds(clock_->Now() - since);
 }
 
 Status BiclopsHead::ReadLink(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) {
@@ -178,7 +177,7 @@ Status BiclopsHead::ReadLink(std::span<std::uint8_t> buf, double timeout_s, std:
   }
   const Status s = link_->Read(buf, std::clamp(timeout_s, 0.0, left), n);
   if (s == Status::kOk && *n > 0) {
-    last_rx_ = Clock::now();
+    last_rx_ = clock_->Now();
     return Status::kOk;
   }
   if (s == Status::kDisconnected) return s;
@@ -188,12 +187,12 @@ Status BiclopsHead::ReadLink(std::span<std::uint8_t> buf, double timeout_s, std:
 
 Status BiclopsHead::Drain(double quiet_s) {
   std::uint8_t buf[64];
-  const Clock::time_point give_up = Clock::now() + std::chrono::milliseconds(200);
+  const Clock::TimePoint give_up = clock_->Now() + std::chrono::milliseconds(200);
   for (;;) {
     std::size_t n = 0;
     const Status s = ReadLink(buf, quiet_s, &n);
     if (s == Status::kDisconnected) return s;
-    if (s != Status::kOk || Clock::now() > give_up) break;
+    if (s != Status::kOk || clock_->Now() > give_up) break;
   }
   link_->Discard();
   return Status::kOk;
@@ -206,13 +205,12 @@ Status BiclopsHead::Exchange(const pmd::Command& command, int result_words, pmd:
   Status s = link_->Write(bytes);
   if (s != Status::kOk) return s;
   decoder_.Expect(result_words);
-  const Clock::time_point sent = Clock::now();
-  const Clock::time_point deadline =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(options_.reply_timeout_s));
+  const Clock::TimePoint sent = clock_->Now();
+  const Clock::TimePoint deadline =
+      clock_->Now() + Clock::FromSeconds(options_.reply_timeout_s);
   std::uint8_t buf[16];
   for (;;) {
-    const double left = Seconds(deadline - Clock::now());
+    const double left = Seconds(deadline - clock_->Now());
     if (left <= 0.0 || silent_) {
       ++counters_.timeouts;
       return Status::kTimeout;
@@ -234,7 +232,7 @@ Status BiclopsHead::Exchange(const pmd::Command& command, int result_words, pmd:
       } else {
         Record(command, true);  // status 0: the chip executed it
       }
-      const double rtt = Seconds(Clock::now() - sent);
+      const double rtt = Seconds(clock_->Now() - sent);
       rtt_s_ = rtt_s_ > 0.0 ? 0.9 * rtt_s_ + 0.1 * rtt : rtt;
       return Status::kOk;
     }
@@ -273,14 +271,14 @@ Status BiclopsHead::Resync() {
     for (std::size_t k = 0; k < pmd::kMaxCommandBytes && !answered; ++k) {
       s = link_->Write(std::span<const std::uint8_t>(&zero, 1));
       if (s != Status::kOk) return s;
-      const Clock::time_point sent = Clock::now();
+      const Clock::TimePoint sent = clock_->Now();
       std::uint8_t buf[16];
       std::size_t n = 0;
       s = ReadLink(buf, wait, &n);
       if (s == Status::kDisconnected) return s;
       if (s == Status::kOk) {
         answered = true;
-        const double rtt = Seconds(Clock::now() - sent);
+        const double rtt = Seconds(clock_->Now() - sent);
         zero_rtt_s_ = zero_rtt_s_ > 0.0 ? 0.9 * zero_rtt_s_ + 0.1 * rtt : rtt;
       }
       if (silent_) return Status::kTimeout;
@@ -446,9 +444,8 @@ Status BiclopsHead::WriteRegister(int axis, Register r, std::int64_t value) {
 
 Status BiclopsHead::ResolveActive(int axis) {
   // A trapezoidal profile ends exactly on its active target: wait for the end and read it.
-  const Clock::time_point give_up =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(longest_move_s_ + options_.settle_margin_s));
+  const Clock::TimePoint give_up =
+      clock_->Now() + Clock::FromSeconds(longest_move_s_ + options_.settle_margin_s);
   for (;;) {
     pmd::Reply reply;
     Status s = Query(axis, pmd::op::kGetActivityStatus, 1, &reply);
@@ -460,8 +457,8 @@ Status BiclopsHead::ResolveActive(int axis) {
       at_rest_[Index(axis)] = true;
       return Status::kOk;
     }
-    if (Clock::now() > give_up) return Status::kTimeout;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (clock_->Now() > give_up) return Status::kTimeout;
+    clock_->SleepFor(std::chrono::milliseconds(5));
   }
 }
 
@@ -576,7 +573,7 @@ Status BiclopsHead::Initialize() {
 Status BiclopsHead::Read(device::HeadState* state) {
   std::lock_guard<std::mutex> lock(mu_);
   BeginCall();
-  const Clock::time_point t0 = Clock::now();
+  const Clock::TimePoint t0 = clock_->Now();
   double q[3];
   bool moving = false;
   for (int a = 0; a < 3; ++a) {
@@ -604,7 +601,7 @@ Status BiclopsHead::Read(device::HeadState* state) {
     rest_q_[Index(a)] = q[a];
     moving = moving || in_motion;
   }
-  const Clock::time_point t1 = Clock::now();
+  const Clock::TimePoint t1 = clock_->Now();
   state->t_s = Seconds(t0 - created_) + 0.5 * Seconds(t1 - t0);
   state->q = {q[0], q[1], q[2]};
   state->moving = moving;
@@ -871,16 +868,15 @@ Status BiclopsHead::HomingMove(int axis, std::int32_t target, int capture, bool*
   const double v_real = vel_reg / pmd::kVelocityScale / cycle_s_;
   const double a_real = acc_reg / pmd::kAccelerationScale / (cycle_s_ * cycle_s_);
   const double expected = distance / v_real + 2.0 * v_real / a_real;
-  const Clock::time_point give_up =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(expected + options_.settle_margin_s));
+  const Clock::TimePoint give_up =
+      clock_->Now() + Clock::FromSeconds(expected + options_.settle_margin_s);
   for (;;) {
     s = Query(axis, pmd::op::kGetActivityStatus, 1, &reply);
     if (s != Status::kOk) return s;
     if ((reply.words[0] & pmd::activity::kInMotion) == 0) break;
     if (StopRequested(stop_)) return Status::kInterrupted;
-    if (Clock::now() > give_up) return Status::kTimeout;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (clock_->Now() > give_up) return Status::kTimeout;
+    clock_->SleepFor(std::chrono::milliseconds(10));
     BeginCall();  // a long sweep is not silence: the chip answers every poll
   }
   *captured = false;
@@ -1056,21 +1052,20 @@ Status BiclopsHead::Stop() {
   // Stopped means at rest: the stop is executed at once, but the servo brakes each axis from
   // its speed (a homing sweep, a move). The safe stop's report must not say "ok" for a head
   // still turning.
-  const Clock::time_point give_up =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(options_.stop_settle_s));
+  const Clock::TimePoint give_up =
+      clock_->Now() + Clock::FromSeconds(options_.stop_settle_s);
   for (int a = 0; a < 3; ++a) {
     for (;;) {
       pmd::Reply reply;
       const Status s = Query(a, pmd::op::kGetActivityStatus, 1, &reply);
       if (s != Status::kOk) return Fail(s);
       if ((reply.words[0] & pmd::activity::kInMotion) == 0) break;
-      if (Clock::now() > give_up) {
+      if (clock_->Now() > give_up) {
         last_error_ = std::string("biclops ") + kAxisNames[a] + ": still moving " +
                       std::to_string(options_.stop_settle_s) + " s after the stop";
         return Status::kTimeout;
       }
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      clock_->SleepFor(std::chrono::milliseconds(5));
       BeginCall();  // braking is not silence: the chip answers every poll
     }
   }

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "biclops/pmd_codec.h"
+#include "common/clock.h"
 #include "common/stop_request.h"
 #include "device/head.h"
 #include "serial/byte_link.h"
@@ -130,8 +131,11 @@ class BiclopsHead final : public device::Head {
  public:
   /// `link`: the serial line (9600 8N1), or a decorator over it. Throws InputError on bad
   /// options (field and value named).
+  /// `clock`: every time the driver reads and every wait it times (a SimClock in simulated
+  /// time; it must outlive the driver).
   explicit BiclopsHead(std::unique_ptr<ByteLink> link,
-                       const BiclopsOptions& options = DefaultBiclopsOptions());
+                       const BiclopsOptions& options = DefaultBiclopsOptions(),
+                       Clock& clock = Clock::Wall());
 
   /// Whether any axis' profile is running (GetActivityStatus, in-motion bit) and the joint
   /// angles (GetActualPosition, read after the status: a head reported at rest is at the
@@ -195,7 +199,6 @@ class BiclopsHead final : public device::Head {
   const CommandLog<pmd::Command>& command_log() const { return command_log_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
   /// What the driver knows of one chip register.
   struct Known {
     bool known = false;
@@ -257,9 +260,10 @@ class BiclopsHead final : public device::Head {
 
   std::unique_ptr<ByteLink> link_;
   BiclopsOptions options_;
+  Clock* clock_;
   mutable std::mutex mu_;
   pmd::ReplyDecoder decoder_;
-  Clock::time_point created_, call_start_, last_rx_;
+  Clock::TimePoint created_, call_start_, last_rx_;
   bool silent_ = false;
   bool need_sync_ = true;
   bool initialized_ = false;

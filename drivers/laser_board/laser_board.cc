@@ -22,9 +22,7 @@ constexpr std::chrono::milliseconds kResendGrace{2};
 // While the port is gone: how often to try again (SerialPort reopens at most every 20 ms).
 constexpr std::chrono::milliseconds kReconnectPoll{20};
 
-double Seconds(std::chrono::steady_clock::duration d) {
-  return std::chrono::duration<double>(d).count();
-}
+double Seconds(Clock::Duration d) { return Clock::ToSeconds(d); }
 
 void Check(bool ok, const std::string& field, const std::string& value,
            const std::string& expected) {
@@ -33,8 +31,9 @@ void Check(bool ok, const std::string& field, const std::string& value,
 
 }  // namespace
 
-LaserBoard::LaserBoard(std::unique_ptr<ByteLink> link, const LaserBoardOptions& options)
-    : options_(options), link_(std::move(link)) {
+LaserBoard::LaserBoard(std::unique_ptr<ByteLink> link, const LaserBoardOptions& options,
+                       Clock& clock)
+    : options_(options), clock_(&clock), link_(std::move(link)) {
   Check(link_ != nullptr, "port", "", "an open serial link");
   Check(options.leds_per_gripper >= 0 && options.leds_per_gripper <= 32, "leds_per_gripper",
         std::to_string(options.leds_per_gripper), "0 to 32");
@@ -139,8 +138,7 @@ Status LaserBoard::Run(const lb::Command& command, std::vector<std::uint8_t>* da
 Status LaserBoard::Transact(const lb::Command& command, lb::Reply* reply) {
   std::lock_guard<std::mutex> lock(mu_);
   ++stats_.calls;
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(options_.call_timeout_s));
+  const auto deadline = clock_->Now() + Clock::FromSeconds(options_.call_timeout_s);
   // Whatever is still buffered answers earlier requests.
   link_->Discard();
   decoder_.Reset();
@@ -191,7 +189,7 @@ Status LaserBoard::Transact(const lb::Command& command, lb::Reply* reply) {
   return Status::kOk;
 }
 
-Status LaserBoard::SyncLocked(Clock::time_point deadline, lb::BoardStatus* status) {
+Status LaserBoard::SyncLocked(Clock::TimePoint deadline, lb::BoardStatus* status) {
   ++stats_.syncs;
   lb::Reply reply;
   if (const Status s = Exchange(lb::kUnsequenced, lb::GetStatus{++token_}, deadline, &reply);
@@ -208,7 +206,7 @@ Status LaserBoard::SyncLocked(Clock::time_point deadline, lb::BoardStatus* statu
 }
 
 Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
-                            Clock::time_point deadline, lb::Reply* reply) {
+                            Clock::TimePoint deadline, lb::Reply* reply) {
   const std::vector<std::uint8_t> request = lb::EncodeFrame(lb::CommandFrame(seq, command));
   const auto code = static_cast<std::uint8_t>(lb::CodeOf(command));
   Status failure = Status::kTimeout;
@@ -248,21 +246,19 @@ Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
     return false;
   };
 
-  while (Clock::now() < deadline) {
+  while (clock_->Now() < deadline) {
     if (!first) ++stats_.retransmissions;
     first = false;
     ++stats_.sends;
     if (link_->Write(request) == Status::kDisconnected) {
       failure = Status::kDisconnected;
-      std::this_thread::sleep_for(
-          std::min<Clock::duration>(kReconnectPoll, deadline - Clock::now()));
+      clock_->SleepFor(std::min<Clock::Duration>(kReconnectPoll, deadline - clock_->Now()));
       continue;
     }
     auto attempt_end = std::min(
-        deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                     std::chrono::duration<double>(options_.reply_timeout_s)));
+        deadline, clock_->Now() + Clock::FromSeconds(options_.reply_timeout_s));
     while (true) {
-      const auto now = Clock::now();
+      const auto now = clock_->Now();
       if (now >= attempt_end) {
         // A complete reply may hide behind a false start byte whose LEN is still waiting for
         // bytes: give that candidate up and look again.
@@ -274,8 +270,7 @@ Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
       const Status s = link_->Read(buf, Seconds(attempt_end - now), &n);
       if (s == Status::kDisconnected) {
         failure = Status::kDisconnected;
-        std::this_thread::sleep_for(
-            std::min<Clock::duration>(kReconnectPoll, deadline - Clock::now()));
+        clock_->SleepFor(std::min<Clock::Duration>(kReconnectPoll, deadline - clock_->Now()));
         break;
       }
       if (s != Status::kOk || n == 0) continue;
@@ -287,7 +282,7 @@ Status LaserBoard::Exchange(std::uint8_t seq, const lb::Command& command,
       // follow in the same burst; else the request is sent again soon, not at the attempt's end.
       // (Only damage the decoder saw used to shorten the attempt: a reply with a damaged start
       // byte right after a dropout cost 80 ms more, and with the dropout the call budget.)
-      attempt_end = std::min(attempt_end, Clock::now() + kResendGrace);
+      attempt_end = std::min(attempt_end, clock_->Now() + kResendGrace);
     }
   }
   return failure;

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.h"
 #include "device/status.h"
 #include "laser_board/laser_board_codec.h"
 #include "serial/byte_link.h"
@@ -60,7 +61,11 @@ class LaserBoard {
  public:
   /// Takes the link (a SerialPort at 115200 8N1, possibly wrapped in a FaultyLink). Throws
   /// hgrasp::InputError for invalid options.
-  explicit LaserBoard(std::unique_ptr<ByteLink> link, const LaserBoardOptions& options = {});
+  /// `clock`: every time the driver reads and every wait it times (the link's own Read waits
+  /// on the link's clock, the same one): the wall clock on a real robot, a SimClock in
+  /// simulated time (it must outlive the driver).
+  explicit LaserBoard(std::unique_ptr<ByteLink> link, const LaserBoardOptions& options = {},
+                      Clock& clock = Clock::Wall());
 
   /// Opens `port` at 115200 8N1 and makes a driver; nullptr and *error on failure.
   static std::shared_ptr<LaserBoard> Open(const std::string& port, const LaserBoardOptions& options,
@@ -102,8 +107,6 @@ class LaserBoard {
   const CommandLog<laser_board::Command>& command_log() const { return command_log_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
-
   /// Runs one command: sequence-number bookkeeping, retries until call_timeout_s. On kOk,
   /// *reply is the board's ACK or NAK for it.
   device::Status Transact(const laser_board::Command& command, laser_board::Reply* reply);
@@ -111,15 +114,16 @@ class LaserBoard {
   device::Status Run(const laser_board::Command& command, std::vector<std::uint8_t>* data,
                      std::size_t data_size);
   /// Learns the board's last sequence number with an unsequenced GET_STATUS.
-  device::Status SyncLocked(Clock::time_point deadline, laser_board::BoardStatus* status);
+  device::Status SyncLocked(Clock::TimePoint deadline, laser_board::BoardStatus* status);
   /// Sends one frame and collects its reply, retransmitting until `deadline`.
   device::Status Exchange(std::uint8_t seq, const laser_board::Command& command,
-                          Clock::time_point deadline, laser_board::Reply* reply);
+                          Clock::TimePoint deadline, laser_board::Reply* reply);
   static std::uint8_t NextSeq(std::uint8_t seq) {
     return seq == 255 ? 1 : static_cast<std::uint8_t>(seq + 1);  // 0 is kUnsequenced
   }
 
   const LaserBoardOptions options_;
+  Clock* clock_;
   mutable std::mutex mu_;
   std::unique_ptr<ByteLink> link_;
   laser_board::FrameDecoder decoder_;

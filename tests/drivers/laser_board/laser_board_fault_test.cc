@@ -1,4 +1,5 @@
-// Fault injection on the laser board link, over a real pty: 1% corrupted bytes and random
+// Fault injection on the laser board link, on a simulated 115200-baud line in simulated time
+// (SimLine: one run per seed, whatever the machine's load): 1% corrupted bytes and random
 // 200 ms dropouts for 1000 commands (none lost, duplicated or altered); lost replies (the
 // board executed, the driver never heard); a cut cable reported within 0.5 s and mended; the
 // port vanishing and coming back.
@@ -18,9 +19,8 @@ namespace {
 namespace lb = laser_board;
 using device::Side;
 using device::Status;
-using testing::BoardRig;
+using testing::SimBoardRig;
 using testing::ReplyEater;
-using testing::SecondsSince;
 
 // Retries `call` through the driver's own API until it returns kOk (at most `tries` times).
 template <class F>
@@ -39,27 +39,27 @@ Status UntilOk(F&& call, int tries, int* failures) {
 // driver's API.
 void ThousandCommands(const std::string& name, const LaserBoardOptions& options,
                       double dropouts_per_s, std::uint64_t seed) {
-  BoardRig rig(name);
+  SimBoardRig rig;
   FaultPlan plan;
   plan.corrupt_probability = 0.01;
   plan.dropouts_per_s = dropouts_per_s;
   plan.dropout_s = 0.2;
   plan.seed = seed;
-  auto faulty = std::make_unique<FaultyLink>(rig.OpenPort(), plan);
+  auto faulty = std::make_unique<FaultyLink>(rig.Open(), plan, rig.clock);
   FaultyLink* link = faulty.get();
-  auto board = std::make_shared<LaserBoard>(std::move(faulty), options);
+  auto board = std::make_shared<LaserBoard>(std::move(faulty), options, rig.clock);
   BoardStripeLaser laser(board);
   BoardLeds leds(board);
   // The first camera frame (VSYNC at 40 ms), so that latches exist.
   while (rig.With([](LaserBoardEmulator& e) { return e.frame(); }) == 0) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    rig.clock.SleepFor(0.005);
   }
 
   // A deterministic mix: state-changing commands with distinct values, and reads.
   std::vector<lb::Command> commanded;
   int failures = 0, reads = 0;
   bool laser_on = false;
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = rig.clock.Now();
   for (int i = 0; i < 1000; ++i) {
     Status s = Status::kOk;
     switch (i % 6) {
@@ -102,7 +102,7 @@ void ThousandCommands(const std::string& name, const LaserBoardOptions& options,
     }
     ASSERT_EQ(s, Status::kOk) << "command " << i;
   }
-  const double elapsed = SecondsSince(t0);
+  const double elapsed = rig.Since(t0);
   const FaultCounts fc = link->counts();
   const LaserBoardStats st = board->stats();
   const auto counts = rig.With([](LaserBoardEmulator& e) { return e.counts(); });
@@ -148,10 +148,10 @@ TEST(LaserBoardFaults, ThousandCommandsWithCallsFailingInDropouts) {
 }
 
 TEST(LaserBoardFaults, LostReplyIsNeverExecutedTwice) {
-  BoardRig rig("lost_reply");
-  auto eater = std::make_unique<ReplyEater>(rig.OpenPort());
+  SimBoardRig rig;
+  auto eater = std::make_unique<ReplyEater>(rig.Open());
   ReplyEater* link = eater.get();
-  auto board = std::make_shared<LaserBoard>(std::move(eater));
+  auto board = std::make_shared<LaserBoard>(std::move(eater), LaserBoardOptions{}, rig.clock);
   BoardStripeLaser laser(board);
   ASSERT_EQ(laser.SetLaser(false), Status::kOk);
 
@@ -189,10 +189,10 @@ TEST(LaserBoardFaults, LostReplyIsNeverExecutedTwice) {
 }
 
 TEST(LaserBoardFaults, CutLinkReportedWithinHalfASecondAndMended) {
-  BoardRig rig("cut");
-  auto faulty = std::make_unique<FaultyLink>(rig.OpenPort(), FaultPlan{});
+  SimBoardRig rig;
+  auto faulty = std::make_unique<FaultyLink>(rig.Open(), FaultPlan{}, rig.clock);
   FaultyLink* link = faulty.get();
-  auto board = std::make_shared<LaserBoard>(std::move(faulty));
+  auto board = std::make_shared<LaserBoard>(std::move(faulty), LaserBoardOptions{}, rig.clock);
   BoardStripeLaser laser(board);
   device::StripeLaserState s;
   ASSERT_EQ(laser.Read(&s), Status::kOk);
@@ -200,52 +200,52 @@ TEST(LaserBoardFaults, CutLinkReportedWithinHalfASecondAndMended) {
   link->Cut(true);
   double worst = 0;
   for (int i = 0; i < 3; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = rig.clock.Now();
     EXPECT_EQ(laser.SetLaser(true), Status::kTimeout);
-    worst = std::max(worst, SecondsSince(t0));
-    const auto t1 = std::chrono::steady_clock::now();
+    worst = std::max(worst, rig.Since(t0));
+    const auto t1 = rig.clock.Now();
     EXPECT_EQ(laser.Read(&s), Status::kTimeout);
-    worst = std::max(worst, SecondsSince(t1));
+    worst = std::max(worst, rig.Since(t1));
   }
   std::printf("cut link reported after at most %.3f s\n", worst);
   EXPECT_LT(worst, 0.5);
   EXPECT_TRUE(rig.Executed().empty());
 
   link->Cut(false);
-  const auto t2 = std::chrono::steady_clock::now();
+  const auto t2 = rig.clock.Now();
   EXPECT_EQ(laser.SetLaser(true), Status::kOk);  // the first call after mending
-  std::printf("mended link: first command done in %.3f s\n", SecondsSince(t2));
+  std::printf("mended link: first command done in %.3f s\n", rig.Since(t2));
   ASSERT_EQ(laser.Read(&s), Status::kOk);
   EXPECT_TRUE(s.laser_on);
   EXPECT_EQ(rig.Executed(), std::vector<lb::Command>{lb::SetLaser{true}});
 }
 
 TEST(LaserBoardFaults, VanishedPortReportedAndRecovered) {
-  BoardRig rig("vanish");
-  auto board = std::make_shared<LaserBoard>(rig.OpenPort());
+  SimBoardRig rig;
+  auto board = std::make_shared<LaserBoard>(rig.Open(), LaserBoardOptions{}, rig.clock);
   BoardStripeLaser laser(board);
   BoardLeds leds(board);
   ASSERT_EQ(leds.Set(Side::kLeft, 1), Status::kOk);
 
-  rig.host().Vanish();
+  rig.line().Vanish();
   double worst = 0;
   for (int i = 0; i < 3; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = rig.clock.Now();
     EXPECT_EQ(leds.Set(Side::kLeft, 2), Status::kDisconnected);
-    worst = std::max(worst, SecondsSince(t0));
+    worst = std::max(worst, rig.Since(t0));
   }
   std::printf("vanished port reported after at most %.3f s\n", worst);
   EXPECT_LT(worst, 0.5);
 
-  rig.host().Reappear();
-  const auto t1 = std::chrono::steady_clock::now();
+  rig.line().Reappear();
+  const auto t1 = rig.clock.Now();
   Status s = Status::kDisconnected;
   int calls = 0;
-  while (s != Status::kOk && SecondsSince(t1) < 2.0) {
+  while (s != Status::kOk && rig.Since(t1) < 2.0) {
     s = leds.Set(Side::kLeft, 2);
     ++calls;
   }
-  std::printf("port back: recovered after %d call(s), %.3f s\n", calls, SecondsSince(t1));
+  std::printf("port back: recovered after %d call(s), %.3f s\n", calls, rig.Since(t1));
   ASSERT_EQ(s, Status::kOk);
   EXPECT_EQ(rig.With([](LaserBoardEmulator& e) { return e.hardware().LedMask(0); }), 2u);
   const std::vector<lb::Command> expected = {lb::SetLeds{0, 1}, lb::SetLeds{0, 2}};

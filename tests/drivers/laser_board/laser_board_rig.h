@@ -1,6 +1,7 @@
 #pragma once
-// Test rig: the laser board emulator served on a real pty (EmulatorHost) and the driver on a
-// SerialPort to it, optionally through a FaultyLink or a link that eats the board's replies.
+// Test rigs: the laser board emulator on a simulated 115200-baud line in simulated time
+// (SimBoardRig), or served on a real pty (BoardRig: EmulatorHost, the driver on a SerialPort);
+// the driver optionally through a FaultyLink or a link that eats the board's replies.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 
 #include "emulators/emulator.h"
 #include "emulators/laser_board_emulator.h"
+#include "emulators/sim_line.h"
 #include "laser_board/board_devices.h"
 #include "laser_board/laser_board.h"
 #include "serial/faulty_link.h"
@@ -73,6 +75,32 @@ class BoardRig {
 
  private:
   EmulatorHost host_;
+};
+
+/// The emulator on a simulated line (SimLine) at the board's baud rate, in simulated time.
+class SimBoardRig {
+ public:
+  explicit SimBoardRig(const LaserBoardEmulatorConfig& config = LaserBoardEmulatorConfig{})
+      : line_(clock, std::make_unique<LaserBoardEmulator>(config), laser_board::kBaud) {}
+
+  /// The driver's end of the line.
+  std::unique_ptr<ByteLink> Open() { return line_.Open(); }
+  SimLine& line() { return line_; }
+
+  template <class F>
+  auto With(F&& f) {
+    return line_.With([&](DeviceEmulator& d) { return f(dynamic_cast<LaserBoardEmulator&>(d)); });
+  }
+  std::vector<laser_board::Command> Executed() {
+    return With([](LaserBoardEmulator& e) { return e.ExecutedCommands(); });
+  }
+  /// Simulated seconds since `t0`.
+  double Since(Clock::TimePoint t0) const { return Clock::ToSeconds(clock.Now() - t0); }
+
+  SimClock clock;
+
+ private:
+  SimLine line_;
 };
 
 inline double SecondsSince(std::chrono::steady_clock::time_point t0) {
