@@ -15,7 +15,7 @@ using sensorhand::MotionState;
 using sensorhand::Reply;
 using sensorhand::SpeedSetting;
 
-constexpr double kPollS = 0.003;             // the I/O thread's read wait
+constexpr double kPollS = 0.003;            // the I/O loop's read wait (its period on a SimClock)
 constexpr double kStreamRetryS = 0.1;        // 0x73 at most this often while the stream is silent
 constexpr double kDisconnectedFailS = 0.05;  // a vanished port fails a call after this
 constexpr std::size_t kHistory = 16;         // samples kept
@@ -27,9 +27,15 @@ constexpr double kContactN = 0.5;    // a grip force above this: the pads touch 
 constexpr double kEndMarginM = 0.005;  // "at an end stop": this near it, beyond the uncertainty
 constexpr double kContactMemoryS = 0.2;  // an object the pads touched this recently is still there
 constexpr int kMaxReversals = 3;     // Open() gives up hunting after this many turns
+// One byte on the hand's line (8N1 at 19200 baud: 10 bits, 0.52 ms). A stream frame describes
+// the hand when its first byte left; its last arrives kDumpFrameBytes bytes later (6.25 ms).
+constexpr double kByteS = 10.0 / sensorhand::kBaud;
+constexpr double kDumpWireS = sensorhand::kDumpFrameBytes * kByteS;
+const double kEchoWireS =
+    static_cast<double>(sensorhand::EncodeSpeedEcho(SpeedSetting{}).size()) * kByteS;
 
-double Seconds(std::chrono::steady_clock::duration d) {
-  return std::chrono::duration<double>(d).count();
+double Seconds(Clock::Duration d) {
+  return Clock::ToSeconds(d);
 }
 
 void Check(bool ok, const char* field, double value, const char* expected) {
@@ -59,11 +65,13 @@ SerialConfig SensorHandHand::SerialConfigFor(std::string port) {
   return c;
 }
 
-SensorHandHand::SensorHandHand(std::unique_ptr<ByteLink> link, SensorHandOptions options)
+SensorHandHand::SensorHandHand(std::unique_ptr<ByteLink> link, SensorHandOptions options,
+                               Clock& clock)
     : link_(std::move(link)),
       options_(options),
       slow_byte_(sensorhand::SpeedByteAtMost(options.slow_speed_m_s / options.full_speed_m_s)),
-      t0_(Clock::now()) {
+      clock_(clock),
+      t0_(clock.Now()) {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
   Check(link_ != nullptr, "link", 0, "a serial link");
@@ -93,13 +101,14 @@ SensorHandHand::SensorHandHand(std::unique_ptr<ByteLink> link, SensorHandOptions
   Check(positive(options_.unresolved_s), "unresolved_s", options_.unresolved_s, "> 0 s");
   estimator_ = sensorhand::OpeningEstimator(ModelOf(options_), 0.0, options_.initial_opening_m,
                                             options_.initial_uncertainty_m);
-  const Clock::time_point now = Clock::now();
+  const Clock::TimePoint now = clock_.Now();
   last_empty_t_ = now;
   last_sample_t_ = now - std::chrono::hours(1);
   last_stream_start_ = last_sample_t_;
   known_since_ = now;
   goal_.id = next_goal_id_++;  // hold: stop the fingers if they move when we connect
-  thread_ = std::thread([this] { IoLoop(); });
+  io_ = clock_.Start(Clock::FromSeconds(kPollS),
+                     [this](Clock::Duration wait) { return IoTurn(Clock::ToSeconds(wait)); });
 }
 
 SensorHandHand::~SensorHandHand() {
@@ -110,48 +119,47 @@ SensorHandHand::~SensorHandHand() {
     hold.id = next_goal_id_++;
     hold.sample_mark = samples_;
     goal_ = hold;
-    const Clock::time_point deadline = Clock::now() + std::chrono::milliseconds(300);
-    cv_.wait_until(lock, deadline, [&] { return !pending_ && known_.stopped(); });
+    clock_.WaitUntil(lock, cv_, clock_.Now() + std::chrono::milliseconds(300),
+                     [&] { return !pending_ && known_.stopped(); });
     send_dump_stop_ = true;
-    cv_.wait_until(lock, Clock::now() + std::chrono::milliseconds(50),
-                   [&] { return !send_dump_stop_; });
+    clock_.WaitUntil(lock, cv_, clock_.Now() + std::chrono::milliseconds(50),
+                     [&] { return !send_dump_stop_; });
     stop_ = true;
   }
   cv_.notify_all();
-  thread_.join();
+  io_.reset();
 }
 
-double SensorHandHand::ToS(Clock::time_point t) const { return Seconds(t - t0_); }
+double SensorHandHand::ToS(Clock::TimePoint t) const { return Seconds(t - t0_); }
 
-// --- The I/O thread ---------------------------------------------------------------------------
+// --- The I/O loop -----------------------------------------------------------------------------
 
-void SensorHandHand::IoLoop() {
-  std::vector<std::uint8_t> out;
-  for (;;) {
-    ReadOnce(kPollS);
-    // Drain: what is decided next rests on everything that has arrived (echoes above all).
-    while (ReadOnce(0.0)) {
-    }
-    out.clear();
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      if (stop_) return;
-      Step(Clock::now(), &out);
-    }
-    if (!out.empty()) {
-      const Clock::time_point t_begin = Clock::now();
-      const Status w = link_->Write(out);
-      const Clock::time_point t_w = Clock::now();
-      std::lock_guard<std::mutex> lock(mu_);
-      if (w != Status::kOk) link_status_ = w;
-      if (pending_ && !pending_->written) {
-        pending_->t_write_begin = t_begin;
-        pending_->t_written = t_w;
-        pending_->written = true;
-      }
-    }
-    cv_.notify_all();
+bool SensorHandHand::IoTurn(double wait_s) {
+  ReadOnce(wait_s);
+  // Drain: what is decided next rests on everything that has arrived (echoes above all).
+  while (ReadOnce(0.0)) {
   }
+  std::vector<std::uint8_t> out;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stop_) return false;
+    Step(clock_.Now(), &out);
+  }
+  if (!out.empty()) {
+    const Clock::TimePoint t_begin = clock_.Now();
+    const Status w = link_->Write(out);
+    const Clock::TimePoint t_w = clock_.Now();
+    std::lock_guard<std::mutex> lock(mu_);
+    if (w != Status::kOk) link_status_ = w;
+    if (pending_ && !pending_->written) {
+      pending_->t_write_begin = t_begin;
+      pending_->t_written = t_w;
+      pending_->write_bytes = out.size();
+      pending_->written = true;
+    }
+  }
+  cv_.notify_all();
+  return true;
 }
 
 bool SensorHandHand::ReadOnce(double timeout_s) {
@@ -159,9 +167,9 @@ bool SensorHandHand::ReadOnce(double timeout_s) {
   std::size_t n = 0;
   // Taken before the read: if it finds nothing, the link was empty at some moment after this,
   // whatever the scheduler did to this thread meanwhile.
-  const Clock::time_point before = Clock::now();
+  const Clock::TimePoint before = clock_.Now();
   const Status s = link_->Read(buf, timeout_s, &n);
-  const Clock::time_point now = Clock::now();
+  const Clock::TimePoint now = clock_.Now();
   std::vector<Reply> replies;
   if (s == Status::kOk && n > 0) decoder_.Push(std::span<const std::uint8_t>(buf, n), &replies);
   std::lock_guard<std::mutex> lock(mu_);
@@ -176,7 +184,7 @@ bool SensorHandHand::ReadOnce(double timeout_s) {
   return true;
 }
 
-void SensorHandHand::HandleReply(const Reply& r, Clock::time_point now) {
+void SensorHandHand::HandleReply(const Reply& r, Clock::TimePoint now) {
   switch (r.kind) {
     case Reply::Kind::kDump:
       HandleSample(r.dump, now);
@@ -186,8 +194,17 @@ void SensorHandHand::HandleReply(const Reply& r, Clock::time_point now) {
       if (pending_ && pending_->written && r.speed == pending_->cmd) {
         // The hand answers a 0x75 it executed with its two speed bytes: it took the command
         // between the write and now.
-        const double t_begin = ToS(pending_->t_write_begin);
-        const double t_echo = ToS(now);
+        double t_begin = ToS(pending_->t_write_begin);
+        double t_echo = ToS(now);
+        // On a line at the hand's baud rate the command's last byte reached the hand no sooner
+        // than its write took on the wire, and the echo left it at least its own length before
+        // it was read. A link faster than that (a pty) leaves the plain window.
+        const double reached = t_begin + static_cast<double>(pending_->write_bytes) * kByteS;
+        const double answered = t_echo - kEchoWireS;
+        if (answered >= reached) {
+          t_begin = reached;
+          t_echo = answered;
+        }
         const double delay = Seconds(now - pending_->t_written);
         stats_.echo_delay_max_s = std::max(stats_.echo_delay_max_s, delay);
         const double echoed = static_cast<double>(stats_.executed - stats_.executed_unechoed + 1);
@@ -226,7 +243,7 @@ bool SensorHandHand::Consistent(const SpeedSetting& s, Evidence e) {
   return e == Evidence::kCloseWay || e == Evidence::kRunning;
 }
 
-bool SensorHandHand::LateEnough(Clock::time_point since) const {
+bool SensorHandHand::LateEnough(Clock::TimePoint since) const {
   // The sample arrived after last_empty_t_, so the hand made it after last_empty_t_ - transit;
   // the setting reached the hand by since + transit; then the fingers need up to a full-speed
   // stop (v / a) and a period to show it in the state byte.
@@ -234,13 +251,14 @@ bool SensorHandHand::LateEnough(Clock::time_point since) const {
   return Seconds(last_empty_t_ - since) >= 2.0 * options_.transit_s + settle;
 }
 
-void SensorHandHand::HandleSample(const DumpSample& d, Clock::time_point now) {
+void SensorHandHand::HandleSample(const DumpSample& d, Clock::TimePoint now) {
   ++samples_;
   ++stats_.samples;
   last_sample_t_ = now;
   history_.push_back({d, now});
   if (history_.size() > kHistory) history_.pop_front();
-  const double t = ToS(now);
+  // Made when its first byte left the hand: its whole frame on the wire before `now`.
+  const double t = ToS(now) - kDumpWireS;
   const double force = sensorhand::ForceN(d.f_bracket);
   // The estimate under the setting the driver knows, before this sample can fix it.
   sensorhand::OpeningEstimator prior = estimator_;
@@ -377,7 +395,7 @@ void SensorHandHand::ResolveExecuted(double t_exec_s, double uncertainty_s) {
   contradictions_ = 0;
 }
 
-void SensorHandHand::Step(Clock::time_point now, std::vector<std::uint8_t>* out) {
+void SensorHandHand::Step(Clock::TimePoint now, std::vector<std::uint8_t>* out) {
   if (send_dump_stop_) {
     const auto stop = sensorhand::EncodeDumpStop();
     out->insert(out->end(), stop.begin(), stop.end());
@@ -466,7 +484,7 @@ double SensorHandHand::StopLead(double speed) const {
   return speed * options_.latency_s + speed * speed / (2.0 * options_.accel_m_s2);
 }
 
-SpeedSetting SensorHandHand::Control(Clock::time_point now) {
+SpeedSetting SensorHandHand::Control(Clock::TimePoint now) {
   if (goal_.done) return sensorhand::kStop;
   const DumpSample& s = history_.back().d;
   const double force = sensorhand::ForceN(s.f_bracket);
@@ -530,8 +548,9 @@ SpeedSetting SensorHandHand::Control(Clock::time_point now) {
         }
         if (goal_.to_end) {
           // Into the end stop, whatever the estimate says, until the stream shows it blocked
-          // (or an object stops the fingers on the way to 0).
-          if (goal_.last_dir != 0) {
+          // (or an object stops the fingers on the way to 0). Stopped again after a move the
+          // hand took: there. Stopped because the move was lost on the line: send it again.
+          if (goal_.moved) {
             goal_.done = true;
             return sensorhand::kStop;
           }
@@ -559,6 +578,7 @@ SpeedSetting SensorHandHand::Control(Clock::time_point now) {
         goal_.contact = false;
         return sensorhand::kStop;
       }
+      goal_.moved = true;
       if (dir < 0 && force > kContactN) {
         // Closing onto an object: stop at the contact (then ease off, and go on only if the
         // target lies the other way).
@@ -607,7 +627,7 @@ bool SensorHandHand::Moving() const {
   return ev == Evidence::kOpenWay || ev == Evidence::kCloseWay;
 }
 
-bool SensorHandHand::Fresh(Clock::time_point now) const {
+bool SensorHandHand::Fresh(Clock::TimePoint now) const {
   return samples_ > 0 && Seconds(now - last_sample_t_) <= options_.fresh_s;
 }
 
@@ -619,22 +639,21 @@ Status SensorHandHand::LinkFailure() const {
 
 Status SensorHandHand::StartGoal(Goal goal) {
   std::unique_lock<std::mutex> lock(mu_);
-  const Clock::time_point t0 = Clock::now();
-  const Clock::time_point deadline =
-      t0 + std::chrono::duration_cast<Clock::duration>(
-               std::chrono::duration<double>(options_.call_timeout_s));
+  const Clock::TimePoint t0 = clock_.Now();
+  const Clock::TimePoint deadline = t0 + Clock::FromSeconds(options_.call_timeout_s);
   goal.id = next_goal_id_++;
   goal.sample_mark = samples_;
   goal_ = goal;
   const std::uint64_t id = goal.id;
   while (acked_goal_id_ < id) {
-    const Clock::time_point now = Clock::now();
+    const Clock::TimePoint now = clock_.Now();
     if (now >= deadline) break;
     if (link_status_ == Status::kDisconnected && !Fresh(now) &&
         Seconds(now - t0) >= kDisconnectedFailS) {
       break;
     }
-    cv_.wait_until(lock, std::min(deadline, now + std::chrono::milliseconds(10)));
+    clock_.WaitUntil(lock, cv_, std::min(deadline, now + std::chrono::milliseconds(10)),
+                     [&] { return acked_goal_id_ >= id; });
   }
   if (acked_goal_id_ >= id) return Status::kOk;
   // Not taken: the goal is dropped (the hand will be stopped once it is reachable again), so a
@@ -675,22 +694,21 @@ Status SensorHandHand::Close(double max_force_n) {
 
 Status SensorHandHand::Read(device::HandState* state) {
   std::unique_lock<std::mutex> lock(mu_);
-  const Clock::time_point t0 = Clock::now();
-  const Clock::time_point deadline =
-      t0 + std::chrono::duration_cast<Clock::duration>(
-               std::chrono::duration<double>(options_.call_timeout_s));
+  const Clock::TimePoint t0 = clock_.Now();
+  const Clock::TimePoint deadline = t0 + Clock::FromSeconds(options_.call_timeout_s);
   for (;;) {
-    const Clock::time_point now = Clock::now();
+    const Clock::TimePoint now = clock_.Now();
     if (Fresh(now)) break;
     if (now >= deadline ||
         (link_status_ == Status::kDisconnected && Seconds(now - t0) >= kDisconnectedFailS)) {
       ++stats_.failures;
       return LinkFailure();
     }
-    cv_.wait_until(lock, std::min(deadline, now + std::chrono::milliseconds(10)));
+    clock_.WaitUntil(lock, cv_, std::min(deadline, now + std::chrono::milliseconds(10)),
+                     [&] { return Fresh(clock_.Now()); });
   }
   const Sample& s = history_.back();
-  state->t_s = Seconds(s.t.time_since_epoch());
+  state->t_s = Seconds(s.t);
   state->opening_m = estimator_.opening_m();
   state->grip_force_n = sensorhand::ForceN(s.d.f_bracket);
   state->moving = (!goal_.done && goal_.kind != GoalKind::kHold) || Moving() || !!pending_;
@@ -699,7 +717,7 @@ Status SensorHandHand::Read(device::HandState* state) {
 
 bool SensorHandHand::WaitIdle(double timeout_s) {
   std::unique_lock<std::mutex> lock(mu_);
-  return cv_.wait_for(lock, std::chrono::duration<double>(timeout_s),
+  return clock_.WaitUntil(lock, cv_, clock_.Now() + Clock::FromSeconds(timeout_s),
                       [&] { return goal_.done && !pending_ && known_.stopped() && !Moving(); });
 }
 
@@ -716,9 +734,7 @@ std::vector<SpeedSetting> SensorHandHand::unresolved() const {
 SensorHandEstimate SensorHandHand::estimate() const {
   std::lock_guard<std::mutex> lock(mu_);
   SensorHandEstimate e;
-  e.t_s = Seconds((t0_ + std::chrono::duration_cast<Clock::duration>(
-                             std::chrono::duration<double>(estimator_.time_s())))
-                      .time_since_epoch());
+  e.t_s = Seconds(t0_ + Clock::FromSeconds(estimator_.time_s()));
   e.opening_m = estimator_.opening_m();
   e.velocity_m_s = estimator_.velocity_m_s();
   e.uncertainty_m = estimator_.uncertainty_m();

@@ -2,12 +2,14 @@
 /// @file The Otto Bock SensorHand Speed driver behind device::Hand
 /// (drivers/sensorhand/PROTOCOL.md), for a stock hand: its data stream gives grip force, state
 /// and current every 12 ms but no finger position, and it echoes each command. The hand only
-/// takes speeds (command 0x75), so Open and Close are closed loops in the driver: a background
-/// thread estimates the opening by dead reckoning (OpeningEstimator: the speeds the hand took and
+/// takes speeds (command 0x75), so Open and Close are closed loops in the driver: an I/O
+/// loop estimates the opening by dead reckoning (OpeningEstimator: the speeds the hand took and
 /// when, the fingers' acceleration, the motor's stall against an object, set to the limit at the
 /// end stops) and sends the next speed setting (0 when the estimate reaches the target, at the
-/// force limit, when the fingers stall). That thread alone owns the link; the seam calls hand it
-/// goals and wait for its answer under a mutex.
+/// force limit, when the fingers stall). That loop alone owns the link; the seam calls hand it
+/// goals and wait for its answer under a mutex. The loop runs on the driver's clock
+/// (common/clock.h): a thread of its own on the wall clock, events of a SimClock in simulated
+/// time (tests, the twin in lockstep).
 ///
 /// Never executed twice: a speed command sets a state. One command is in flight at a time; it
 /// counts as executed when the hand's echo of it arrives, or, the echo lost, when two samples
@@ -31,9 +33,9 @@
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "common/clock.h"
 #include "device/hand.h"
 #include "sensorhand/opening_estimator.h"
 #include "sensorhand/sensorhand_codec.h"
@@ -97,7 +99,7 @@ struct SensorHandOptions {
 
 /// The driver's opening estimate (OpeningEstimator) at the newest sample.
 struct SensorHandEstimate {
-  double t_s = 0.0;             ///< steady clock (s), as HandState::t_s
+  double t_s = 0.0;             ///< the driver's clock (s), as HandState::t_s
   double opening_m = 0.0;       ///< estimated pad distance (m)
   double velocity_m_s = 0.0;    ///< estimated rate (m/s)
   double uncertainty_m = 0.0;   ///< bound on the estimate's error (m), 0 right at an end stop
@@ -131,8 +133,11 @@ struct SensorHandStats {
 class SensorHandHand final : public device::Hand {
  public:
   /// Takes the link (a SerialPort at 19200 8N1, possibly wrapped in a FaultyLink) and starts
-  /// the I/O thread, which starts the data stream. Throws InputError on bad options.
-  explicit SensorHandHand(std::unique_ptr<ByteLink> link, SensorHandOptions options = {});
+  /// the I/O loop, which starts the data stream. Throws InputError on bad options.
+  /// `clock`: what the driver reads the time from and waits on, its I/O loop included (a
+  /// thread of its own on the wall clock; events on a SimClock).
+  explicit SensorHandHand(std::unique_ptr<ByteLink> link, SensorHandOptions options = {},
+                          Clock& clock = Clock::Wall());
   /// Stops the fingers (speed 0, which holds a grip: the gear does not back-drive) and the
   /// stream, as far as the link allows within about 0.3 s.
   ~SensorHandHand() override;
@@ -140,12 +145,12 @@ class SensorHandHand final : public device::Hand {
   SensorHandHand& operator=(const SensorHandHand&) = delete;
 
   /// The latest stream sample: the estimated opening (estimate() says how good it is), the grip
-  /// force (bracket force), moving (the fingers move or a goal is under way). t_s: steady clock
+  /// force (bracket force), moving (the fingers move or a goal is under way). t_s: the driver's clock
   /// (s) when the sample arrived. Waits up to call_timeout_s for a sample when the stream is
   /// silent.
   device::Status Read(device::HandState* state) override;
   /// Starts moving the fingers to `opening_m` (clamped to 0..max_opening_m) and returns when
-  /// the hand has taken the first speed command (or needed none); the I/O thread stops the
+  /// the hand has taken the first speed command (or needed none); the I/O loop stops the
   /// fingers there, as estimated. A target within opening_tolerance_m of an end (0 or
   /// max_opening_m) drives the fingers into that end until the stream shows them blocked, which
   /// fixes the estimate there. An object in the way (a grip force while closing) stops them at
@@ -154,7 +159,7 @@ class SensorHandHand final : public device::Hand {
   device::Status Open(double opening_m) override;
   /// Starts closing at the speed whose stall force is at most `max_force_n` (clamped to
   /// max_force_n; raised to the smallest step, about 1.2 N) and returns when the hand has
-  /// taken the command; the I/O thread stops the fingers (speed 0) when the force reaches the
+  /// taken the command; the I/O loop stops the fingers (speed 0) when the force reaches the
   /// limit, the fingers stall on an object, or they meet. kRejected unless max_force_n > 0.
   device::Status Close(double max_force_n) override;
   /// Open(max_opening_m): the fingers run to the open end stop, which fixes the estimate.
@@ -181,7 +186,6 @@ class SensorHandHand final : public device::Hand {
   static SerialConfig SerialConfigFor(std::string port);
 
  private:
-  using Clock = std::chrono::steady_clock;
   enum class GoalKind { kHold, kOpen, kClose };
   struct Goal {
     GoalKind kind = GoalKind::kHold;
@@ -197,6 +201,7 @@ class SensorHandHand final : public device::Hand {
     bool at_object = false;    ///< kOpen: the pads met an object during this goal
     bool homing = false;       ///< kOpen: the estimate was lost, finding the open end stop
     int last_dir = 0;          ///< kOpen: +1 opening, -1 closing, 0 not moved yet
+    bool moved = false;        ///< kOpen: the hand took a move of this goal (not just sent)
     int reversals = 0;
   };
   /// What a sample's state byte says about the speed setting in force.
@@ -208,8 +213,9 @@ class SensorHandHand final : public device::Hand {
   };
   struct Pending {
     sensorhand::SpeedSetting cmd, before;
-    Clock::time_point t_write_begin;  ///< before the write began
-    Clock::time_point t_written;      ///< after the write returned
+    Clock::TimePoint t_write_begin{};  ///< before the write began
+    Clock::TimePoint t_written{};      ///< after the write returned
+    std::size_t write_bytes = 0;       ///< bytes of that write (the command last)
     bool written = false;
     sensorhand::OpeningEstimator at_write;  ///< the estimate as the command was written
     std::vector<Observation> since_write;   ///< samples since, to replay once it is resolved
@@ -222,50 +228,53 @@ class SensorHandHand final : public device::Hand {
   };
   struct Sample {
     sensorhand::DumpSample d;
-    Clock::time_point t;  ///< when it was read
+    Clock::TimePoint t{};  ///< when it was read
   };
 
-  void IoLoop();
+  /// One turn of the I/O loop: reads (waiting up to wait_s), decides, writes. False once
+  /// stopped.
+  bool IoTurn(double wait_s);
   /// Reads once (waiting up to timeout_s) and handles what arrived; false when nothing came.
   bool ReadOnce(double timeout_s);
-  void HandleReply(const sensorhand::Reply& r, Clock::time_point now);
-  void HandleSample(const sensorhand::DumpSample& d, Clock::time_point now);
+  void HandleReply(const sensorhand::Reply& r, Clock::TimePoint now);
+  void HandleSample(const sensorhand::DumpSample& d, Clock::TimePoint now);
   /// The estimate at t_s (estimator time) had the pending command taken effect latency_s after
   /// its write, from the samples' forces since.
   sensorhand::OpeningEstimator Hypothesis(const Pending& p, double t_s) const;
   /// The pending command took effect at t_exec_s (estimator time), known to +-uncertainty_s.
   void ResolveExecuted(double t_exec_s, double uncertainty_s);
   /// Decides what to write now (under mu_): stream restart, the next speed command.
-  void Step(Clock::time_point now, std::vector<std::uint8_t>* out);
+  void Step(Clock::TimePoint now, std::vector<std::uint8_t>* out);
   /// The speed setting the current goal wants now; may mark it done.
-  sensorhand::SpeedSetting Control(Clock::time_point now);
+  sensorhand::SpeedSetting Control(Clock::TimePoint now);
   /// Whether the newest sample shows the fingers blocked under the current setting.
   bool Blocked() const;
   /// Whether the grip force has stopped rising under the current close setting.
   bool ForceSettled() const;
   bool Moving() const;
-  bool Fresh(Clock::time_point now) const;
+  bool Fresh(Clock::TimePoint now) const;
   /// Sets a goal and waits for the hand to take its first command.
   device::Status StartGoal(Goal goal);
   /// The status a call that could not reach the hand returns.
   device::Status LinkFailure() const;
   double SpeedOf(std::uint8_t b) const;  ///< m/s of a speed byte
   double StopLead(double speed) const;   ///< m the fingers run on after a stop decision
-  double ToS(Clock::time_point t) const;  ///< estimator time (s since construction)
+  double ToS(Clock::TimePoint t) const;  ///< estimator time (s since construction)
   static Evidence Classify(std::uint8_t state);
   static bool Consistent(const sensorhand::SpeedSetting& s, Evidence e);
   /// Whether a sample read after the link was last empty at `last_empty` was made late enough
   /// after the command in force since `since` to judge it by the state byte.
-  bool LateEnough(Clock::time_point since) const;
+  bool LateEnough(Clock::TimePoint since) const;
 
   const std::unique_ptr<ByteLink> link_;
   const SensorHandOptions options_;
   const std::uint8_t slow_byte_;
-  const Clock::time_point t0_;
+  Clock& clock_;
+  const Clock::TimePoint t0_;
 
   mutable std::mutex mu_;
   std::condition_variable cv_;
-  sensorhand::ReplyDecoder decoder_;  // I/O thread only
+  sensorhand::ReplyDecoder decoder_;  // I/O loop only
   bool stop_ = false;
   bool shutting_down_ = false;
   bool send_dump_stop_ = false;
@@ -273,12 +282,12 @@ class SensorHandHand final : public device::Hand {
   device::Status link_status_ = device::Status::kOk;
   std::deque<Sample> history_;  ///< the latest samples, newest last
   std::uint64_t samples_ = 0;
-  Clock::time_point last_empty_t_{};  ///< the last read that found nothing began then
-  Clock::time_point last_sample_t_{};
-  Clock::time_point last_stream_start_{};
+  Clock::TimePoint last_empty_t_{};  ///< the last read that found nothing began then
+  Clock::TimePoint last_sample_t_{};
+  Clock::TimePoint last_stream_start_{};
   sensorhand::SpeedSetting known_;       ///< the hand's setting, as last known
-  Clock::time_point known_since_{};      ///< when it was written (it took effect after)
-  Clock::time_point known_resolved_t_{};  ///< the newest sample when the driver learnt it
+  Clock::TimePoint known_since_{};      ///< when it was written (it took effect after)
+  Clock::TimePoint known_resolved_t_{};  ///< the newest sample when the driver learnt it
   std::uint64_t known_since_sample_ = 0;  ///< samples_ then
   bool setting_known_ = false;  ///< the first sample has told whether the hand is still
   bool known_shown_ = false;    ///< a settled sample has shown known_ since it took effect
@@ -293,7 +302,7 @@ class SensorHandHand final : public device::Hand {
   std::vector<sensorhand::SpeedSetting> executed_, unresolved_;
   CommandLog<sensorhand::Command> command_log_;
   SensorHandStats stats_;
-  std::thread thread_;
+  std::unique_ptr<Clock::Worker> io_;  ///< the I/O loop; last, so that it stops first
 };
 
 }  // namespace hgrasp::drivers

@@ -11,9 +11,12 @@
 /// SimClock's: its construction, 0).
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <utility>
 
 namespace hgrasp {
@@ -30,6 +33,27 @@ class Clock {
   /// Returns at `t` (at once when `t` has passed). On a SimClock the events due by `t` run
   /// first, in time order.
   virtual void SleepUntil(TimePoint t) = 0;
+
+  /// Waits on `cv` (as std::condition_variable::wait_until; `lock` held on entry and on
+  /// return) until `pred()` holds or `deadline` passes; returns `pred()`. `pred` is called
+  /// with the lock held. On a SimClock the lock is released while the events due run (a party
+  /// that would take it to change what `pred` reads is one of them), so no party waits on a
+  /// lock held by another.
+  virtual bool WaitUntil(std::unique_lock<std::mutex>& lock, std::condition_variable& cv,
+                         TimePoint deadline, const std::function<bool()>& pred) = 0;
+
+  /// A party that acts on its own (a driver's I/O loop). Destroying the handle stops it: no
+  /// turn runs after the destructor returns.
+  class Worker {
+   public:
+    virtual ~Worker() = default;
+  };
+  /// Runs `turn(wait)` again and again until it returns false or the handle is destroyed. On
+  /// the wall clock, in a thread of its own, each turn waiting up to `wait` for its input itself
+  /// (a read's timeout) so that it answers what arrives at once; on a SimClock, as an event
+  /// every `wait` of simulated time (or more often: SimClock's worker_poll) on the thread that
+  /// waits, given 0 (what arrived meanwhile is there to be read).
+  virtual std::unique_ptr<Worker> Start(Duration wait, std::function<bool(Duration)> turn) = 0;
 
   void SleepFor(Duration d) { SleepUntil(Now() + d); }
   void SleepFor(double seconds) { SleepFor(FromSeconds(seconds)); }
@@ -56,9 +80,20 @@ class SimClock final : public Clock {
  public:
   using EventId = std::uint64_t;
 
+  /// A worker (Start) turns at least every `worker_poll` of simulated time, whatever wait it
+  /// asks for: on the wall clock its turn wakes as soon as its input arrives (a blocking read
+  /// returns within the scheduler's latency, tens of microseconds), and a worker that dates what
+  /// it reads by the time it reads it must see it as promptly here. 100 us by default.
+  explicit SimClock(Duration worker_poll = std::chrono::microseconds(100))
+      : worker_poll_(worker_poll) {}
+
   TimePoint Now() const override { return now_; }
   /// Runs every event due by `t` in time order, then sets the time to `t` (never backwards).
   void SleepUntil(TimePoint t) override;
+  /// RunUntil(deadline, pred) with `lock` released while events run (taken again for `pred`).
+  bool WaitUntil(std::unique_lock<std::mutex>& lock, std::condition_variable& cv,
+                 TimePoint deadline, const std::function<bool()>& pred) override;
+  std::unique_ptr<Worker> Start(Duration wait, std::function<bool(Duration)> turn) override;
 
   /// Runs events in time order until `done()` holds (checked first and after each event) or
   /// the next event lies past `deadline`; the time then stays at the last event run when
@@ -76,10 +111,14 @@ class SimClock final : public Clock {
   /// Events run so far.
   std::uint64_t events_run() const { return events_run_; }
 
+  struct WorkerState;
+
  private:
+  void ScheduleTurn(const std::shared_ptr<WorkerState>& state, TimePoint t);
   // Runs the earliest event when it is due by `t`; false when none is.
   bool RunOne(TimePoint t);
 
+  Duration worker_poll_;
   TimePoint now_{0};
   // (time, sequence) -> event: equal times in the order scheduled.
   std::map<std::pair<TimePoint, EventId>, std::function<void()>> events_;

@@ -5,7 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace hgrasp {
@@ -111,6 +115,92 @@ TEST(SimClock, AnEventInThePastRunsAtTheNextWaitAtNow) {
   clock.At(milliseconds(100), [&] { ran_at = clock.Now(); });
   clock.SleepFor(0.0);
   EXPECT_EQ(ran_at, milliseconds(500));
+}
+
+// A worker's turns on a SimClock: one at the start, then every `wait`, each given 0 (its input
+// has arrived); it stops when a turn says so, or when its handle goes.
+TEST(SimClock, AWorkerTurnsEveryWaitUntilItStops) {
+  SimClock clock(milliseconds(50));  // polls finer than 50 ms only when asked to
+  std::vector<double> turns;
+  auto worker = clock.Start(milliseconds(3), [&](Clock::Duration wait) {
+    EXPECT_EQ(wait, Clock::Duration(0));
+    turns.push_back(clock.NowSeconds());
+    return turns.size() < 4;
+  });
+  EXPECT_TRUE(turns.empty());  // nothing runs until the caller waits
+  clock.SleepFor(0.1);
+  ASSERT_EQ(turns.size(), 4u);
+  EXPECT_DOUBLE_EQ(turns[0], 0.0);
+  EXPECT_DOUBLE_EQ(turns[3], 0.009);
+
+  int more = 0;
+  auto other = clock.Start(milliseconds(10), [&](Clock::Duration) { return ++more, true; });
+  clock.SleepFor(0.0251);  // at 0.1, 0.11, 0.12
+  EXPECT_EQ(more, 3);
+  other.reset();
+  clock.SleepFor(1.0);
+  EXPECT_EQ(more, 3);
+  EXPECT_EQ(clock.NextEvent(), Clock::TimePoint::max());
+
+  // A worker that would wait longer than worker_poll turns every worker_poll: a blocking read
+  // would have answered what arrived meanwhile at once.
+  int slow = 0;
+  auto lazy = clock.Start(milliseconds(200), [&](Clock::Duration) { return ++slow, true; });
+  clock.SleepFor(0.12);  // at +0, +0.05, +0.1
+  EXPECT_EQ(slow, 3);
+}
+
+// A party waiting on a condition while a worker (an event) takes the same lock to change it:
+// on a SimClock the lock is free while the events run, so neither waits on the other.
+TEST(SimClock, WaitUntilLetsTheWorkersTakeTheLock) {
+  SimClock clock(milliseconds(5));
+  std::mutex mu;
+  std::condition_variable cv;
+  int count = 0;
+  auto worker = clock.Start(milliseconds(5), [&](Clock::Duration) {
+    std::lock_guard<std::mutex> lock(mu);
+    ++count;
+    return true;
+  });
+  std::unique_lock<std::mutex> lock(mu);
+  EXPECT_TRUE(clock.WaitUntil(lock, cv, clock.Now() + milliseconds(100), [&] { return count == 3; }));
+  EXPECT_TRUE(lock.owns_lock());
+  EXPECT_EQ(clock.Now(), milliseconds(10));  // the third turn
+  EXPECT_FALSE(clock.WaitUntil(lock, cv, clock.Now() + milliseconds(7), [&] { return count > 9; }));
+  EXPECT_EQ(clock.Now(), milliseconds(17));
+  EXPECT_EQ(count, 4);  // at 15 ms
+}
+
+// The wall clock's worker is a thread whose turns wait themselves; its handle joins it.
+TEST(WallClock, AWorkerRunsInAThreadUntilItsHandleGoes) {
+  Clock& wall = Clock::Wall();
+  std::mutex mu;
+  std::condition_variable cv;
+  int turns = 0;
+  auto worker = wall.Start(milliseconds(1), [&](Clock::Duration wait) {
+    EXPECT_EQ(wait, milliseconds(1));
+    std::this_thread::sleep_for(wait);  // as a read with that timeout would
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      ++turns;
+    }
+    cv.notify_all();
+    return true;
+  });
+  {
+    std::unique_lock<std::mutex> lock(mu);
+    EXPECT_TRUE(wall.WaitUntil(lock, cv, wall.Now() + std::chrono::seconds(10),
+                               [&] { return turns >= 3; }));
+  }
+  worker.reset();  // joined: no turn runs after this
+  int at_stop = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu);
+    at_stop = turns;
+  }
+  std::this_thread::sleep_for(milliseconds(10));
+  std::lock_guard<std::mutex> lock(mu);
+  EXPECT_EQ(turns, at_stop);
 }
 
 }  // namespace
