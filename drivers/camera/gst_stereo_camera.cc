@@ -211,20 +211,17 @@ Status GstStereoCamera::Grab(device::StereoFrame* frame) {
     }
     const std::optional<std::uint64_t> a = OffsetOf(streams_[0]->pending);
     const std::optional<std::uint64_t> b = OffsetOf(streams_[1]->pending);
-    if (!a || !b || *a == *b) break;
-    const int older = *a < *b ? 0 : 1;
-    const std::uint64_t gap = *a < *b ? *b - *a : *a - *b;
-    if (gap > static_cast<std::uint64_t>(kMaxPairingDrops) || drops == kMaxPairingDrops) {
-      last_error_ = "cameras: the left frame " + std::to_string(*a) + " and the right frame " +
-                    std::to_string(*b) + " do not pair (the streams' frame numbers are " +
-                    std::to_string(gap) + " apart; at most " + std::to_string(kMaxPairingDrops) +
-                    " frames are dropped to pair them)";
-      Drop(older);
-      ++stats_.unpaired[older];
-      return Status::kBadReply;
-    }
+    const PairStep step = NextPairStep(a, b, drops, kMaxPairingDrops);
+    if (step == PairStep::kPaired) break;
+    const int older = step == PairStep::kDropLeft    ? 0
+                      : step == PairStep::kDropRight ? 1
+                                                     : OlderOf(*a, *b);
     Drop(older);
     ++stats_.unpaired[older];
+    if (step == PairStep::kUnpairable) {
+      last_error_ = UnpairableMessage(*a, *b, kMaxPairingDrops);
+      return Status::kBadReply;
+    }
   }
 
   // 2. The images, checked and copied out of the samples.
@@ -287,45 +284,10 @@ Status GstStereoCamera::Grab(device::StereoFrame* frame) {
   Drop(1);
   frame->sequence = sequence_++;
   ++stats_.pairs;
-  frame->laser_encoder_count = 0;
-  frame->laser_on = false;
-  frame->head = {};
 
   // 3. What the board latched at this exposure, and the head.
-  if (latch_) {
-    std::optional<std::uint32_t> wanted;
-    if (config_.latch_pairing == LatchPairing::kOffset) {
-      if (!offset) {
-        last_error_ =
-            "left camera: the frame carries no frame number (buffer offset), which "
-            "latch_pairing offset needs";
-        return Status::kBadReply;
-      }
-      // The board's counter is 32 bits: it wraps, and so does the sum.
-      wanted = static_cast<std::uint32_t>(
-          *offset + static_cast<std::uint64_t>(static_cast<std::int64_t>(config_.frame_offset)));
-    }
-    ExposureLatch latch;
-    const Status s = latch_(wanted, &latch);
-    if (s != Status::kOk) {
-      last_error_ = "laser board: no latch for this frame";
-      if (wanted) last_error_.append(" (board frame ").append(std::to_string(*wanted)).append(")");
-      last_error_.append(" (").append(ToString(s)).append(")");
-      return s;
-    }
-    frame->laser_encoder_count = latch.encoder_count;
-    frame->laser_on = latch.laser_on;
-  }
-  if (head_ != nullptr) {
-    device::HeadState head;
-    const Status s = head_->Read(&head);
-    if (s != Status::kOk) {
-      last_error_ = "head: no reading for this frame (" + std::string(ToString(s)) + ")";
-      return s;
-    }
-    frame->head = head.q;
-  }
-  return Status::kOk;
+  return AnnotateExposure(config_.latch_pairing, config_.frame_offset, offset, latch_, head_, frame,
+                          &last_error_);
 }
 
 }  // namespace hgrasp::drivers

@@ -17,7 +17,8 @@
 ///   otherwise buffer seconds of stale frames); the frames dropped are not silent:
 ///   gaps in the buffer offsets (the frame numbers) are counted in stats().frames_lost.
 ///
-/// Left and right are paired by frame number when both carry one (GStreamer's buffer offset:
+/// Left and right are paired by frame number (camera/exposure_pairing.h, shared with the twin's
+/// lockstep camera) when both carry one (GStreamer's buffer offset:
 /// the twin's server sets the board's frame number; v4l2src and videotestsrc count frames from
 /// the stream's start): the older is dropped until the numbers match, at most
 /// kMaxPairingDrops frames; streams further apart do not count the same frames (kBadReply).
@@ -30,27 +31,11 @@
 #include <optional>
 #include <string>
 
+#include "camera/exposure_pairing.h"
 #include "device/head.h"
 #include "device/stereo_camera.h"
 
 namespace hgrasp::drivers {
-
-/// What the laser board latched at a camera frame (its vertical sync).
-struct ExposureLatch {
-  std::uint32_t frame = 0;         ///< the board's frame counter
-  std::int32_t encoder_count = 0;  ///< laser motor encoder at that frame
-  bool laser_on = false;
-};
-/// Asks the laser board for the latch of board frame `*frame`, or its newest latch when `frame`
-/// is empty. kRejected when that frame's latch is no longer (or not yet) on the board.
-using LatchSource =
-    std::function<device::Status(std::optional<std::uint32_t> frame, ExposureLatch*)>;
-
-/// Which of the board's latches goes with a frame.
-enum class LatchPairing {
-  kLatest,  ///< the board's newest latch at grab time
-  kOffset,  ///< the latch of board frame = the buffer's offset + frame_offset
-};
 
 struct GstCameraConfig {
   std::string left, right;        ///< GStreamer pipelines ending in appsink

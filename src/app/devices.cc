@@ -2,8 +2,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include <chrono>
-#include <thread>
 
 #include "app/output_dir.h"
 #include "biclops/biclops_head.h"
@@ -120,10 +118,11 @@ Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop) {
     if (s == device::Status::kOk && state.grip_force_n < kHoldingForceN) {
       spdlog::info("{}: opening to the end stop (the driver's opening estimate is exact there)", key);
       s = hand.Home();
-      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
-      while (s == device::Status::kOk && (s = hand.Read(&state)) == device::Status::kOk &&
-             state.moving && std::chrono::steady_clock::now() < until && !StopRequested(stop)) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      // Up to 3 s, in the driver's clock, looking at the stop request every 50 ms; a link that
+      // fails meanwhile ends the wait.
+      for (int i = 0; s == device::Status::kOk && i < 60 && !StopRequested(stop); ++i) {
+        if (hand.WaitIdle(0.05)) break;
+        s = hand.Read(&state);
       }
     }
     if (s != device::Status::kOk) {
