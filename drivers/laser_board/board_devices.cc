@@ -41,4 +41,15 @@ int BoardLeds::Count(device::Side side) const { return board_->LedCount(side); }
 
 Status BoardLeds::Set(device::Side side, std::uint32_t mask) { return board_->SetLeds(side, mask); }
 
+LatchSource BoardLatchSource(std::shared_ptr<LaserBoard> board) {
+  return [board = std::move(board)](std::optional<std::uint32_t> frame, ExposureLatch* out) {
+    FrameLatch l;
+    const Status status = frame ? board->FrameLatchOf(*frame, &l) : board->LatestFrameLatch(&l);
+    out->frame = l.frame;
+    out->encoder_count = l.encoder_count;
+    out->laser_on = l.laser_on;
+    return status;
+  };
+}
+
 }  // namespace hgrasp::drivers

@@ -1,9 +1,10 @@
 #pragma once
 /// @file The device seam (src/device/) over the laser board: its stripe laser and its gripper
-/// LEDs, two thin adapters sharing one LaserBoard.
+/// LEDs, two thin adapters sharing one LaserBoard, and the cameras' source of its latches.
 
 #include <memory>
 
+#include "camera/exposure_pairing.h"
 #include "device/leds.h"
 #include "device/stripe_laser.h"
 #include "laser_board/laser_board.h"
@@ -46,5 +47,9 @@ class BoardLeds final : public device::Leds {
  private:
   std::shared_ptr<LaserBoard> board_;
 };
+
+/// What a stereo camera asks the board for each frame (camera/exposure_pairing.h): the latch of
+/// one board frame (FrameLatchOf), or the newest (LatestFrameLatch).
+LatchSource BoardLatchSource(std::shared_ptr<LaserBoard> board);
 
 }  // namespace hgrasp::drivers

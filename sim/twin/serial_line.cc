@@ -2,19 +2,64 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <limits>
 
+#include "common/error.h"
+
 namespace hgrasp::sim {
+
+using device::Status;
+
+class SerialLine::InProcessLink final : public drivers::ByteLink {
+ public:
+  InProcessLink(SerialLine* line, SimClock& clock) : line_(line), clock_(clock) {}
+  Status Write(std::span<const std::uint8_t> bytes) override {
+    if (line_->vanished_) return Status::kDisconnected;
+    line_->host_in_.insert(line_->host_in_.end(), bytes.begin(), bytes.end());
+    return Status::kOk;
+  }
+  Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+    *n = 0;
+    const Clock::TimePoint deadline = clock_.Now() + Clock::FromSeconds(std::max(0.0, timeout_s));
+    clock_.RunUntil(deadline, [this] { return !line_->host_out_.empty() || line_->vanished_; });
+    if (line_->vanished_) return Status::kDisconnected;
+    if (line_->host_out_.empty()) return Status::kTimeout;
+    while (*n < buf.size() && !line_->host_out_.empty()) {
+      buf[(*n)++] = line_->host_out_.front();
+      line_->host_out_.pop_front();
+    }
+    return Status::kOk;
+  }
+  void Discard() override { line_->host_out_.clear(); }
+
+ private:
+  SerialLine* line_;
+  SimClock& clock_;
+};
 
 SerialLine::SerialLine(std::string key, std::unique_ptr<drivers::DeviceEmulator> device,
                        std::string link_path, int baud, std::optional<drivers::FaultPlan> faults)
     : key_(std::move(key)),
       device_(std::move(device)),
-      pty_(std::move(link_path)),
+      pty_(std::make_unique<drivers::Pty>(std::move(link_path))),
       baud_(baud),
       byte_s_(10.0 / baud) {
   if (faults) faults_.emplace(*faults);
+}
+
+SerialLine::SerialLine(std::string key, std::unique_ptr<drivers::DeviceEmulator> device, int baud,
+                       std::optional<drivers::FaultPlan> faults)
+    : key_(std::move(key)), device_(std::move(device)), baud_(baud), byte_s_(10.0 / baud) {
+  if (faults) faults_.emplace(*faults);
+}
+
+SerialLine::~SerialLine() = default;
+
+std::unique_ptr<drivers::ByteLink> SerialLine::HostLink(SimClock& clock) {
+  HGRASP_DEMAND_MSG(in_process(), "SerialLine::HostLink: the line is on a pty");
+  return std::make_unique<InProcessLink>(this, clock);
 }
 
 void SerialLine::Cut(bool cut) {
@@ -28,12 +73,18 @@ void SerialLine::CutFromDevice(bool cut) {
 }
 
 void SerialLine::Vanish() {
-  pty_.Close();
+  if (pty_) pty_->Close();
+  vanished_ = true;
+  host_in_.clear();
+  host_out_.clear();
   rx_.clear();
   tx_.clear();
 }
 
-void SerialLine::Reappear() { pty_.Reopen(); }
+void SerialLine::Reappear() {
+  if (pty_) pty_->Reopen();
+  vanished_ = false;
+}
 
 drivers::FaultCounts SerialLine::fault_counts() const {
   return faults_ ? faults_->counts() : drivers::FaultCounts{};
@@ -47,12 +98,15 @@ double SerialLine::NextDue() const {
 }
 
 void SerialLine::Poll(double t_s) {
-  const int fd = pty_.master_fd();
+  const int master = fd();
   std::vector<std::uint8_t> in, passed;
-  if (fd >= 0) {
+  if (in_process()) {
+    in.assign(host_in_.begin(), host_in_.end());
+    host_in_.clear();
+  } else if (master >= 0) {
     std::uint8_t buf[512];
     for (;;) {
-      const ssize_t n = ::read(fd, buf, sizeof buf);  // the master is non-blocking
+      const ssize_t n = ::read(master, buf, sizeof buf);  // the master is non-blocking
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) break;
       in.insert(in.end(), buf, buf + n);
@@ -99,10 +153,17 @@ void SerialLine::Poll(double t_s) {
   } else if (!cut_ && !cut_from_device_) {
     sent = std::move(due);
   }
-  if (sent.empty() || fd < 0) return;
+  if (sent.empty()) return;
+  if (in_process()) {
+    if (vanished_) return;
+    host_out_.insert(host_out_.end(), sent.begin(), sent.end());
+    bytes_to_host_ += sent.size();
+    return;
+  }
+  if (master < 0) return;
   std::size_t done = 0;
   while (done < sent.size()) {
-    const ssize_t n = ::write(fd, sent.data() + done, sent.size() - done);
+    const ssize_t n = ::write(master, sent.data() + done, sent.size() - done);
     if (n > 0) {
       done += static_cast<std::size_t>(n);
       continue;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "common/error.h"
 #include "common/paths.h"
 #include "robot/arm_kinematics.h"
 #include "robot/kinematic_tree.h"
@@ -33,8 +34,20 @@ Twin::Twin(Scenario scenario, const TwinOptions& options, FrameSink sink)
     : scenario_(scenario), options_(options), sink_(std::move(sink)) {
   world_ = std::make_unique<World>(std::move(scenario), options.world);
   job_data_ = mj_makeData(world_->model());
-  render_thread_ = std::thread([this] { RenderLoop(); });
-  {
+  if (options.lockstep != nullptr) {
+    // Rendered at once, in this thread, from a world of its own (the LEDs and the laser are
+    // set on it per frame, as the render thread does).
+    try {
+      render_world_ = std::make_unique<World>(scenario_, options_.world);
+      render_rig_ = std::make_unique<StereoRig>(render_world_.get());
+    } catch (...) {
+      mj_deleteData(job_data_);
+      throw;
+    }
+  } else {
+    render_thread_ = std::thread([this] { RenderLoop(); });
+  }
+  if (options.lockstep == nullptr) {
     std::unique_lock<std::mutex> lock(render_mu_);
     render_cv_.wait(lock, [this] { return render_ready_; });
     if (!render_error_.empty()) {
@@ -80,22 +93,36 @@ Twin::Twin(Scenario scenario, const TwinOptions& options, FrameSink sink)
     }
     std::optional<drivers::FaultPlan> faults = options.faults;
     if (faults) faults->seed += 7919u * static_cast<unsigned>(index);
-    const std::string link = options.dir.empty() ? "" : options.dir + "/" + key;
-    lines_.push_back(
-        std::make_unique<SerialLine>(key, std::move(device), link, spec.baud, faults));
+    if (options.lockstep != nullptr) {
+      lines_.push_back(std::make_unique<SerialLine>(key, std::move(device), spec.baud, faults));
+    } else {
+      const std::string link = options.dir.empty() ? "" : options.dir + "/" + key;
+      lines_.push_back(
+          std::make_unique<SerialLine>(key, std::move(device), link, spec.baud, faults));
+    }
     ++index;
   }
   next_frame_s_ = world_->time() + kFramePeriodS;
   for (int s = 0; s < 2; ++s) {
     for (int j = 0; j < 6; ++j) {
-      const int joint = world_->Id(mjOBJ_JOINT, std::string(s == 0 ? "left" : "right") + "_j" +
-                                                    std::to_string(j + 1));
+      const int joint = world_->Id(
+          mjOBJ_JOINT, std::string(s == 0 ? "left" : "right") + "_j" + std::to_string(j + 1));
       arm_dofs_[s][j] = world_->model()->jnt_dofadr[joint];
     }
+  }
+  if (options.lockstep != nullptr) {
+    // One time base: the clock reads the world's time (a world starts after its settling).
+    t0_ = world_->time();
+    SimClock& clock = *options.lockstep;
+    const Clock::TimePoint world_now(Clock::FromSeconds(t0_));
+    if (clock.Now() < world_now) clock.SleepUntil(world_now);
+    tick_ = clock.At(clock.Now() + Clock::FromSeconds(world_->model()->opt.timestep),
+                     [this] { Tick(); });
   }
 }
 
 Twin::~Twin() {
+  if (options_.lockstep != nullptr) options_.lockstep->Cancel(tick_);
   {
     std::lock_guard<std::mutex> lock(render_mu_);
     render_stop_ = true;
@@ -159,6 +186,49 @@ void Twin::RenderLoop() {
   }
 }
 
+void Twin::Render(World& world, StereoRig& rig, const mjData* state,
+                  const std::array<std::uint32_t, 2>& leds, bool laser, std::uint64_t frame,
+                  double t) {
+  mj_copyData(world.data(), world.model(), state);
+  const int count = world.LedCount("left");
+  for (int s = 0; s < 2; ++s) {
+    for (int i = 0; i < count; ++i) {
+      world.SetLed(s == 0 ? "left" : "right", i, (leds[s] >> i) & 1u);
+    }
+  }
+  world.set_laser_on(laser);
+  const auto t0 = std::chrono::steady_clock::now();
+  StereoImages images = rig.Expose(frame);
+  if (sink_) {
+    for (int c = 0; c < 2; ++c) sink_(c, images.image[c], frame, t);
+  }
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::lock_guard<std::mutex> lock(render_mu_);
+  frames_.render_s += took;
+  frames_.max_render_s = std::max(frames_.max_render_s, took);
+  ++frames_.rendered;
+}
+
+std::unique_ptr<drivers::ByteLink> Twin::HostLink(const std::string& key) {
+  HGRASP_DEMAND_MSG(options_.lockstep != nullptr, "Twin::HostLink: the twin is not in lockstep");
+  SerialLine* l = line(key);
+  HGRASP_DEMAND_MSG(l != nullptr, "Twin::HostLink: no such line");
+  return l->HostLink(*options_.lockstep);
+}
+
+void Twin::Tick() {
+  // At clock time T: the world steps from T - dt to T, the lines are polled at T, and an
+  // exposure due at T is taken (Turn's order: poll, expose, step), so the world's time is the
+  // clock's after every tick.
+  const double dt = world_->model()->opt.timestep;
+  StepPhysics(dt);
+  for (auto& l : lines_) l->Poll(world_->time());
+  WatchHands();
+  if (world_->time() + 0.5 * dt >= next_frame_s_) Expose(0.0);
+  SimClock& clock = *options_.lockstep;
+  tick_ = clock.At(clock.Now() + Clock::FromSeconds(dt), [this] { Tick(); });
+}
+
 SerialLine* Twin::line(const std::string& key) {
   for (auto& l : lines_) {
     if (l->key() == key) return l.get();
@@ -198,6 +268,13 @@ void Twin::Expose(double late_s) {
   e.laser_on = world_->laser_on();
   // The board takes the latch at once (VSYNC is a wire to it), before the image is out.
   line("laser_board")->Poll(world_->time());
+  if (!cameras_stopped_ && options_.lockstep != nullptr) {
+    e.rendered = true;
+    exposures_.push_back(e);
+    Render(*render_world_, *render_rig_, world_->data(), {board_->LedMask(0), board_->LedMask(1)},
+           world_->laser_on(), frame_, e.t_s);
+    return;
+  }
   if (!cameras_stopped_) {
     std::lock_guard<std::mutex> lock(render_mu_);
     if (late_s > kFramePeriodS || rendering_) {
@@ -221,8 +298,8 @@ void Twin::WatchHands() {
     const double v = hands_[s]->commanded_velocity();
     if (v < 0.0 && !(hand_velocity_[s] < 0.0)) {
       const std::string side = s == 0 ? "left" : "right";
-      grips_.push_back({side, world_->time(),
-                        world_->BodyPose(world_->Id(mjOBJ_BODY, side + "_gripper"))});
+      grips_.push_back(
+          {side, world_->time(), world_->BodyPose(world_->Id(mjOBJ_BODY, side + "_gripper"))});
     }
     if (v != hand_velocity_[s]) {
       TwinHandEvent e;
@@ -294,7 +371,8 @@ std::string Twin::Control(const std::string& command) {
   if (key == "laser" || key == "leds") key = "laser_board";
   SerialLine* l = line(key);
   if (l == nullptr) {
-    return "no such line '" + arg + "' (arm_left, arm_right, hand_left, hand_right, head, "
+    return "no such line '" + arg +
+           "' (arm_left, arm_right, hand_left, hand_right, head, "
            "laser_board; or 'cameras')";
   }
   if (verb == "cut") {
@@ -428,46 +506,45 @@ json Twin::Report() const {
   }
   json controls = json::array();
   for (const auto& [t, c] : controls_) controls.push_back({{"t_s", t}, {"command", c}});
-  return {{"scenario", scenario_.name},
-          {"t0_s", t0_},
-          {"controls", controls},
-          {"exposures", exposures},
-          {"rate", options_.rate},
-          {"twin_s", world_->time() - t0_},
-          {"frames",
-           {{"exposures", frames_.exposures},
-            {"rendered", frames_.rendered},
-            {"overruns", frames_.overruns},
-            {"mean_render_ms",
-             frames_.rendered ? 1e3 * frames_.render_s / frames_.rendered : 0.0},
-            {"max_render_ms", 1e3 * frames_.max_render_s},
-            {"max_lag_ms", 1e3 * frames_.max_lag_s}}},
-          {"lines", lines},
-          {"truth",
-           {{"grips", grips},
-            {"hand_events", hand_events},
-            {"boxes", boxes},
-            {"head_rad",
-             {world_->JointPosition("head_pan"), world_->JointPosition("head_tilt"),
-              world_->JointPosition("head_verge_left")}},
-            {"laser_count", board_->EncoderCount()},
-            {"laser_on", world_->laser_on()},
-            {"arms",
-             {{"left",
-               {{"last_moving_t_s", arm_last_moving_s_[0]},
-                {"X_WE", PoseJson(world_->BodyPose(world_->Id(mjOBJ_BODY, "left_gripper")))}}},
-              {"right",
-               {{"last_moving_t_s", arm_last_moving_s_[1]},
-                {"X_WE", PoseJson(world_->BodyPose(world_->Id(mjOBJ_BODY, "right_gripper")))}}}}},
-            {"leds", {{"left", board_->LedMask(0)}, {"right", board_->LedMask(1)}}},
-            {"hands",
-             {{"left",
-               {{"opening_m", hands_[0]->opening_m()}, {"force_n", hands_[0]->grip_force_n()}}},
-              {"right",
-               {{"opening_m", hands_[1]->opening_m()},
-                {"force_n", hands_[1]->grip_force_n()}}}}}}},
-          {"commands", commands},
-          {"command_times_s", times}};
+  return {
+      {"scenario", scenario_.name},
+      {"t0_s", t0_},
+      {"controls", controls},
+      {"exposures", exposures},
+      {"rate", options_.rate},
+      {"lockstep", options_.lockstep != nullptr},
+      {"twin_s", world_->time() - t0_},
+      {"frames",
+       {{"exposures", frames_.exposures},
+        {"rendered", frames_.rendered},
+        {"overruns", frames_.overruns},
+        {"mean_render_ms", frames_.rendered ? 1e3 * frames_.render_s / frames_.rendered : 0.0},
+        {"max_render_ms", 1e3 * frames_.max_render_s},
+        {"max_lag_ms", 1e3 * frames_.max_lag_s}}},
+      {"lines", lines},
+      {"truth",
+       {{"grips", grips},
+        {"hand_events", hand_events},
+        {"boxes", boxes},
+        {"head_rad",
+         {world_->JointPosition("head_pan"), world_->JointPosition("head_tilt"),
+          world_->JointPosition("head_verge_left")}},
+        {"laser_count", board_->EncoderCount()},
+        {"laser_on", world_->laser_on()},
+        {"arms",
+         {{"left",
+           {{"last_moving_t_s", arm_last_moving_s_[0]},
+            {"X_WE", PoseJson(world_->BodyPose(world_->Id(mjOBJ_BODY, "left_gripper")))}}},
+          {"right",
+           {{"last_moving_t_s", arm_last_moving_s_[1]},
+            {"X_WE", PoseJson(world_->BodyPose(world_->Id(mjOBJ_BODY, "right_gripper")))}}}}},
+        {"leds", {{"left", board_->LedMask(0)}, {"right", board_->LedMask(1)}}},
+        {"hands",
+         {{"left", {{"opening_m", hands_[0]->opening_m()}, {"force_n", hands_[0]->grip_force_n()}}},
+          {"right",
+           {{"opening_m", hands_[1]->opening_m()}, {"force_n", hands_[1]->grip_force_n()}}}}}}},
+      {"commands", commands},
+      {"command_times_s", times}};
 }
 
 }  // namespace hgrasp::sim

@@ -13,21 +13,29 @@
 /// An exposure that comes while the last one is still being rendered, or that the loop reaches
 /// more than one frame period late, is latched but not rendered: an overrun, counted and
 /// reported.
+///
+/// In lockstep (TwinOptions::lockstep, a SimClock) the same twin runs in simulated time in the
+/// caller's process and thread: each physics step is an event of that clock (one every
+/// timestep, the lines polled after it as Turn does), the lines have no pty (SerialLine::HostLink
+/// gives the drivers their ends), and each exposure is rendered at once, before the step after
+/// it. A driver waiting in a read runs the twin up to its answer; nothing depends on the wall
+/// clock, so one scenario and seed give one run.
 
 #include <array>
 #include <condition_variable>
-#include <mutex>
-#include <thread>
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <opencv2/core/mat.hpp>
+#include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "common/clock.h"
 #include "serial/faulty_link.h"
 #include "sim/scenario.h"
 #include "sim/stereo_rig.h"
@@ -49,6 +57,11 @@ struct TwinOptions {
   /// Seed of the Biclops' power-up state (its chips read 0 wherever the head stands).
   std::uint64_t seed = 1;
   WorldOptions world;
+  /// Lockstep: the twin runs as events of this clock (which must outlive it), its lines in
+  /// process; `dir` and `rate` are unused. The clock is set to the world's time when it is
+  /// behind (a world starts after its settling), so drivers and twin share one time base.
+  /// Null: wall-clock time (Run), lines on ptys.
+  SimClock* lockstep = nullptr;
 };
 
 /// The serial devices the twin serves, with their default bauds (drivers/config kDrivers).
@@ -111,8 +124,11 @@ class Twin {
   Twin(Scenario scenario, const TwinOptions& options, FrameSink sink);
   ~Twin();
 
-  /// Runs until `keep_going` returns false (asked between loop turns, about every ms).
+  /// Runs until `keep_going` returns false (asked between loop turns, about every ms). Not in
+  /// lockstep, where the clock's waits run the twin.
   void Run(const std::function<bool()>& keep_going);
+  /// In lockstep: the host's end of line `key` (SerialLine::HostLink on the twin's clock).
+  std::unique_ptr<drivers::ByteLink> HostLink(const std::string& key);
   /// One loop turn at wall time `wall_s` since Run began (for tests that drive it themselves).
   void Turn(double wall_s);
 
@@ -144,6 +160,12 @@ class Twin {
   void StepPhysics(double dt);
   void Expose(double late_s);
   void WatchHands();
+  // Lockstep: one physics step and the lines after it (Turn's loop body), then the next tick.
+  void Tick();
+  // Renders the state `state` with the LEDs and the laser given into the sink, in `world` (the
+  // renderer's own) through `rig`; adds to frames_ (under render_mu_).
+  void Render(World& world, StereoRig& rig, const mjData* state,
+              const std::array<std::uint32_t, 2>& leds, bool laser, std::uint64_t frame, double t);
 
   Scenario scenario_;
   TwinOptions options_;
@@ -162,6 +184,10 @@ class Twin {
   double job_t_ = 0.0;
   bool job_pending_ = false, rendering_ = false, render_ready_ = false, render_stop_ = false;
   std::string render_error_;
+  // Lockstep: the renderer's world and rig (in this thread), and the next tick.
+  std::unique_ptr<World> render_world_;
+  std::unique_ptr<StereoRig> render_rig_;
+  SimClock::EventId tick_ = 0;
   std::vector<std::unique_ptr<SerialLine>> lines_;
   // The models behind the emulators (owned by them).
   std::array<TwinHandModel*, 2> hands_{};

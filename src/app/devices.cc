@@ -184,16 +184,7 @@ device::RobotDevices MakeDevices(const sim::Scenario& s, sim::SimRobot* twin) {
   }
   if (const auto* cameras = c.Backend<cfg::GstreamerBackend>("cameras")) {
     // The scenario loader has checked that the laser is on the board.
-    drivers::LatchSource latch = [board](std::optional<std::uint32_t> frame,
-                                         drivers::ExposureLatch* out) {
-      drivers::FrameLatch l;
-      const device::Status status =
-          frame ? board->FrameLatchOf(*frame, &l) : board->LatestFrameLatch(&l);
-      out->frame = l.frame;
-      out->encoder_count = l.encoder_count;
-      out->laser_on = l.laser_on;
-      return status;
-    };
+    drivers::LatchSource latch = drivers::BoardLatchSource(board);
     std::string error;
     auto camera = drivers::GstStereoCamera::Open(cameras->cameras, latch, dev.head.get(), &error);
     if (!camera) {

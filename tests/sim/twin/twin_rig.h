@@ -87,15 +87,7 @@ struct TwinRig {
     std::unique_ptr<drivers::SerialPort> arm_port = open("arm_right");
     if (!arm_port) return;
     arm = std::make_unique<drivers::Val2Arm>(std::move(arm_port));
-    drivers::LatchSource latch = [b = board](std::optional<std::uint32_t> frame,
-                                             drivers::ExposureLatch* out) {
-      drivers::FrameLatch l;
-      const Status status = frame ? b->FrameLatchOf(*frame, &l) : b->LatestFrameLatch(&l);
-      out->frame = l.frame;
-      out->encoder_count = l.encoder_count;
-      out->laser_on = l.laser_on;
-      return status;
-    };
+    drivers::LatchSource latch = drivers::BoardLatchSource(board);
     drivers::GstCameraConfig config;
     config.left = server->ClientPipeline(0);
     config.right = server->ClientPipeline(1);
