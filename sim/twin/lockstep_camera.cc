@@ -22,10 +22,11 @@ void LockstepFrames::Put(int camera, const cv::Mat& bgr, std::uint64_t number, d
 }
 
 LockstepCamera::LockstepCamera(SimClock& clock, std::shared_ptr<LockstepFrames> frames,
-                               drivers::LatchSource latch, device::Head* head,
-                               double frame_timeout_s)
+                               std::function<bool()> develop, drivers::LatchSource latch,
+                               device::Head* head, double frame_timeout_s)
     : clock_(clock),
       frames_(std::move(frames)),
+      develop_(std::move(develop)),
       latch_(std::move(latch)),
       head_(head),
       frame_timeout_s_(frame_timeout_s) {}
@@ -34,7 +35,12 @@ Status LockstepCamera::Grab(device::StereoFrame* frame) {
   LockstepFrames& f = *frames_;
   for (int drops = 0;; ++drops) {
     const Clock::TimePoint deadline = clock_.Now() + Clock::FromSeconds(frame_timeout_s_);
-    if (!clock_.RunUntil(deadline, [&f] { return f.pending(0) && f.pending(1); })) {
+    // The newest exposure taken before this call, else the next one: developed as it comes.
+    auto ready = [&] {
+      if (develop_) develop_();
+      return f.pending(0) && f.pending(1);
+    };
+    if (!clock_.RunUntil(deadline, ready)) {
       last_error_ = std::string(f.pending(0) ? "right" : "left") + " camera: no frame for " +
                     std::to_string(frame_timeout_s_) + " s (frame_timeout_s)";
       return Status::kTimeout;

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <opencv2/core/mat.hpp>
 #include <optional>
@@ -46,8 +47,12 @@ class LockstepCamera final : public device::StereoCamera {
   /// both must outlive the camera. Frames are paired by their numbers and the latch asked for
   /// by the same (latch_pairing offset, frame_offset 0: the twin's frame numbers are the
   /// board's).
+  /// `develop` renders the newest exposure not yet rendered into `frames` (Twin::Develop),
+  /// false when there is none: the camera calls it when it takes a frame, so that only the
+  /// exposures taken are rendered.
   LockstepCamera(SimClock& clock, std::shared_ptr<LockstepFrames> frames,
-                 drivers::LatchSource latch, device::Head* head, double frame_timeout_s = 0.5);
+                 std::function<bool()> develop, drivers::LatchSource latch, device::Head* head,
+                 double frame_timeout_s = 0.5);
 
   /// The newest exposure of both cameras not yet grabbed, else the next one; kTimeout when none
   /// comes within frame_timeout_s (the twin's cameras stopped), kBadReply when the two
@@ -64,6 +69,7 @@ class LockstepCamera final : public device::StereoCamera {
  private:
   SimClock& clock_;
   std::shared_ptr<LockstepFrames> frames_;
+  std::function<bool()> develop_;
   drivers::LatchSource latch_;
   device::Head* head_;
   double frame_timeout_s_;

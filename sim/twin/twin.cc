@@ -152,36 +152,24 @@ void Twin::RenderLoop() {
     render_ready_ = true;
   }
   render_cv_.notify_all();
-  const int leds = world->LedCount("left");
   for (;;) {
+    std::array<std::uint32_t, 2> leds{};
+    bool laser = false;
     std::uint64_t frame = 0;
     double t = 0.0;
     {
       std::unique_lock<std::mutex> lock(render_mu_);
       render_cv_.wait(lock, [this] { return job_pending_ || render_stop_; });
       if (render_stop_) return;
-      mj_copyData(world->data(), world->model(), job_data_);
-      for (int s = 0; s < 2; ++s) {
-        for (int i = 0; i < leds; ++i) {
-          world->SetLed(s == 0 ? "left" : "right", i, (job_leds_[s] >> i) & 1u);
-        }
-      }
-      world->set_laser_on(job_laser_);
+      leds = job_leds_;
+      laser = job_laser_;
       frame = job_frame_;
       t = job_t_;
       job_pending_ = false;
     }
-    const auto t0 = std::chrono::steady_clock::now();
-    StereoImages images = rig->Expose(frame);
-    if (sink_) {
-      for (int c = 0; c < 2; ++c) sink_(c, images.image[c], frame, t);
-    }
-    const double took =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // job_data_ stays as it is until rendering_ is cleared (Expose writes it only then).
+    Render(*world, *rig, job_data_, leds, laser, frame, t);
     std::lock_guard<std::mutex> lock(render_mu_);
-    frames_.render_s += took;
-    frames_.max_render_s = std::max(frames_.max_render_s, took);
-    ++frames_.rendered;
     rendering_ = false;
   }
 }
@@ -207,6 +195,19 @@ void Twin::Render(World& world, StereoRig& rig, const mjData* state,
   frames_.render_s += took;
   frames_.max_render_s = std::max(frames_.max_render_s, took);
   ++frames_.rendered;
+}
+
+bool Twin::Develop() {
+  if (options_.lockstep == nullptr || !job_pending_) return false;
+  job_pending_ = false;
+  Render(*render_world_, *render_rig_, job_data_, job_leds_, job_laser_, job_frame_, job_t_);
+  for (auto it = exposures_.rbegin(); it != exposures_.rend(); ++it) {
+    if (it->frame == job_frame_) {
+      it->rendered = true;
+      break;
+    }
+  }
+  return true;
 }
 
 std::unique_ptr<drivers::ByteLink> Twin::HostLink(const std::string& key) {
@@ -269,10 +270,15 @@ void Twin::Expose(double late_s) {
   // The board takes the latch at once (VSYNC is a wire to it), before the image is out.
   line("laser_board")->Poll(world_->time());
   if (!cameras_stopped_ && options_.lockstep != nullptr) {
-    e.rendered = true;
+    // The state at the exposure, developed (rendered) when a camera takes it (Develop); a newer
+    // exposure replaces one nobody took, which is then never rendered.
+    mj_copyData(job_data_, world_->model(), world_->data());
+    job_leds_ = {board_->LedMask(0), board_->LedMask(1)};
+    job_laser_ = world_->laser_on();
+    job_frame_ = frame_;
+    job_t_ = e.t_s;
+    job_pending_ = true;
     exposures_.push_back(e);
-    Render(*render_world_, *render_rig_, world_->data(), {board_->LedMask(0), board_->LedMask(1)},
-           world_->laser_on(), frame_, e.t_s);
     return;
   }
   if (!cameras_stopped_) {

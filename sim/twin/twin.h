@@ -17,9 +17,9 @@
 /// In lockstep (TwinOptions::lockstep, a SimClock) the same twin runs in simulated time in the
 /// caller's process and thread: each physics step is an event of that clock (one every
 /// timestep, the lines polled after it as Turn does), the lines have no pty (SerialLine::HostLink
-/// gives the drivers their ends), and each exposure is rendered at once, before the step after
-/// it. A driver waiting in a read runs the twin up to its answer; nothing depends on the wall
-/// clock, so one scenario and seed give one run.
+/// gives the drivers their ends), and each exposure keeps its moment's state to be rendered when
+/// a camera takes it (Develop). A driver waiting in a read runs the twin up to its answer; nothing
+/// depends on the wall clock, so one scenario and seed give one run.
 
 #include <array>
 #include <condition_variable>
@@ -129,6 +129,11 @@ class Twin {
   void Run(const std::function<bool()>& keep_going);
   /// In lockstep: the host's end of line `key` (SerialLine::HostLink on the twin's clock).
   std::unique_ptr<drivers::ByteLink> HostLink(const std::string& key);
+  /// In lockstep: renders the newest exposure not yet rendered into the sink (the state, LEDs
+  /// and laser of its moment, kept at the exposure); false when there is none. An exposure is
+  /// rendered only when a camera takes it: one that a newer exposure replaced first never is
+  /// (frame_counts(): exposures, rendered).
+  bool Develop();
   /// One loop turn at wall time `wall_s` since Run began (for tests that drive it themselves).
   void Turn(double wall_s);
 

@@ -38,8 +38,8 @@ struct CalibrateLaserOptions {
 int CalibrateLaser(const CalibrateLaserOptions& options);
 
 struct CalibrateCamerasOptions {
-  std::string scenario;     ///< a scene with chessboards on stands (scenarios/calibration_boards.yaml)
-  std::string out_file;     ///< the camera intrinsics YAML to write
+  std::string scenario;  ///< a scene with chessboards on stands (scenarios/calibration_boards.yaml)
+  std::string out_file;  ///< the camera intrinsics YAML to write
   std::string report_file;  ///< optional: the views, the fit and (on the twin) its truth, as JSON
   std::string views_dir;    ///< optional: each view's images with the corners found, as PNGs
   /// Points in W (m) the head looks at, one per board; from each, kPosesPerPoint head poses.
@@ -93,6 +93,9 @@ struct RunOptions {
   /// Where to write the real drivers' command logs (app::CommandLogs) once the robot is left
   /// safe; "" for none.
   std::string command_log;
+  /// Every device on its real driver against the twin in simulated time, in this process
+  /// (app/devices.h); the twin's report (truth, its command logs) written as twin.json.
+  bool lockstep = false;
 };
 
 /// `hgrasp run`: the whole task (look, plan, approach, servo, close, lift): the outputs of
@@ -102,7 +105,7 @@ struct RunOptions {
 int Run(const RunOptions& options);
 
 struct GenerateOptions {
-  std::string family = "random_boxes";  ///< a scene family (kSceneFamilies)
+  std::string family = "random_boxes";          ///< a scene family (kSceneFamilies)
   std::uint64_t first_seed = 1, last_seed = 1;  ///< the seed range, inclusive
   std::string out_dir;
 };
@@ -130,8 +133,8 @@ struct SweepOptions {
   std::optional<std::pair<std::uint64_t, std::uint64_t>> seeds;
   std::string stage = "run";  ///< scan, model, plan or run
   std::string out_dir;
-  int jobs = 1;                ///< scene processes at once
-  double time_limit_s = 300;   ///< a scene's process is killed after this long (s)
+  int jobs = 1;               ///< scene processes at once
+  double time_limit_s = 300;  ///< a scene's process is killed after this long (s)
   CalibrationFiles files;
   std::string baseline;        ///< compare with this baseline; regressions exit 1
   std::string write_baseline;  ///< write the sweep's baseline here
@@ -142,9 +145,9 @@ struct SweepOptions {
   /// Write the manifest and the generated scenario files, run nothing (the shards then run by
   /// --shard on other machines, e.g. through GNU parallel).
   bool prepare = false;
-  bool slurm = false;          ///< submit a job array instead of running here
-  int shards = 0;              ///< array tasks (0: min(scenes, kDefaultShards))
-  bool slurm_wait = false;     ///< wait for the array to end (squeue), then merge
+  bool slurm = false;                    ///< submit a job array instead of running here
+  int shards = 0;                        ///< array tasks (0: min(scenes, kDefaultShards))
+  bool slurm_wait = false;               ///< wait for the array to end (squeue), then merge
   std::vector<std::string> sbatch_args;  ///< more sbatch options (partition, account, ...)
 };
 
@@ -183,9 +186,9 @@ struct TwinCommandOptions {
   std::optional<double> seconds;         ///< stop after this long (twin time); else at a signal
   std::string camera_host = "127.0.0.1";
   std::array<int, 2> camera_ports = {5600, 5601};  ///< TCP ports of the streams (0: any free)
-  double corrupt = 0.0;         ///< per byte and direction, on every serial line
-  double dropouts_per_s = 0.0;  ///< mean rate of dropouts on every serial line
-  double dropout_s = 0.2;       ///< length of a dropout (s)
+  double corrupt = 0.0;                            ///< per byte and direction, on every serial line
+  double dropouts_per_s = 0.0;                     ///< mean rate of dropouts on every serial line
+  double dropout_s = 0.2;                          ///< length of a dropout (s)
   /// Least time a line works between two dropouts (s); unset: one dropout's length, so that
   /// every outage is one dropout long (FaultPlan::min_dropout_gap_s).
   std::optional<double> dropout_gap_s;

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <functional>
 
 #include "app/output_dir.h"
 #include "biclops/biclops_head.h"
@@ -24,6 +25,8 @@ namespace cfg = drivers;
 
 // Below this grip force a hand holds nothing (N): DESIGN.md's grips are 10-100 N.
 constexpr double kHoldingForceN = 5.0;
+
+device::RobotDevices MakeLockstepDevices(const sim::Scenario& s, Robot& robot);
 
 // "FILE:LINE" of a device's entry, for errors found when opening it.
 std::string Where(const sim::Scenario& s, const cfg::DeviceConfig& d) {
@@ -99,11 +102,43 @@ bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
   return true;
 }
 
-Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop) {
+drivers::DevicesConfig LockstepDevices(const drivers::DevicesConfig& given) {
+  drivers::DevicesConfig c;
+  auto take = [&](const std::string& key, auto backend) {
+    using B = decltype(backend);
+    if (const B* b = given.Backend<B>(key)) backend = *b;
+    c.entries[key] = cfg::DeviceConfig{backend, 0};
+  };
+  for (const char* key : {"arm_left", "arm_right"}) take(key, cfg::Val2Backend{});
+  for (const char* key : {"hand_left", "hand_right"}) take(key, cfg::SensorHandBackend{});
+  take("head", cfg::BiclopsBackend{});
+  take("laser", cfg::LaserBoardBackend{});
+  take("leds", cfg::LaserBoardBackend{});
+  return c;
+}
+
+Robot OpenRobot(const sim::Scenario& given, const StopRequest* stop, bool lockstep) {
   Robot robot;
+  sim::Scenario lockstep_scenario;
+  if (lockstep) {
+    lockstep_scenario = given;
+    lockstep_scenario.devices = LockstepDevices(given.devices);
+    robot.clock = std::make_unique<SimClock>();
+    robot.frames = std::make_shared<sim::LockstepFrames>();
+    sim::TwinOptions options;
+    options.lockstep = robot.clock.get();
+    options.seed = given.seed + 1;  // as `hgrasp twin` seeds it
+    // The twin's world is the scenario's, its devices all simulated (they are the twin's).
+    sim::Scenario world = given;
+    world.devices = {};
+    robot.lockstep = std::make_unique<sim::Twin>(std::move(world), options,
+                                                 sim::LockstepFrames::SinkFor(robot.frames));
+  }
+  const sim::Scenario& scenario = lockstep ? lockstep_scenario : given;
   robot.all_simulated = scenario.devices.AllSimulated();
   if (scenario.devices.AnySimulated()) robot.twin = std::make_unique<sim::SimRobot>(scenario);
-  robot.devices = MakeDevices(scenario, robot.twin.get());
+  robot.devices =
+      lockstep ? MakeLockstepDevices(scenario, robot) : MakeDevices(scenario, robot.twin.get());
   // A stock SensorHand measures no finger position: its driver integrates the commanded speeds
   // from an assumed start. A real hand that holds nothing opens to its end stop, where the
   // opening is known exactly; one that grips (a box held since the last run) keeps gripping.
@@ -112,11 +147,13 @@ Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop) {
     if (robot.start_failure || scenario.devices.Backend<cfg::SensorHandBackend>(key) == nullptr) {
       continue;
     }
-    auto& hand = dynamic_cast<drivers::SensorHandHand&>(*robot.devices.hand[static_cast<int>(side)]);
+    auto& hand =
+        dynamic_cast<drivers::SensorHandHand&>(*robot.devices.hand[static_cast<int>(side)]);
     device::HandState state;
     device::Status s = hand.Read(&state);
     if (s == device::Status::kOk && state.grip_force_n < kHoldingForceN) {
-      spdlog::info("{}: opening to the end stop (the driver's opening estimate is exact there)", key);
+      spdlog::info("{}: opening to the end stop (the driver's opening estimate is exact there)",
+                   key);
       s = hand.Home();
       // Up to 3 s, in the driver's clock, looking at the stop request every 50 ms; a link that
       // fails meanwhile ends the wait.
@@ -126,8 +163,8 @@ Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop) {
       }
     }
     if (s != device::Status::kOk) {
-      robot.start_failure = StartFailure{key, s, key + ": " + std::string(device::ToString(s)) +
-                                                     " while opening to the end stop"};
+      robot.start_failure = StartFailure{
+          key, s, key + ": " + std::string(device::ToString(s)) + " while opening to the end stop"};
     }
   }
   // A freshly powered Biclops does not know where its axes are (relative encoders).
@@ -148,40 +185,71 @@ Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop) {
   return robot;
 }
 
-device::RobotDevices MakeDevices(const sim::Scenario& s, sim::SimRobot* twin) {
-  const cfg::DevicesConfig& c = s.devices;
-  HGRASP_DEMAND_MSG(twin != nullptr || !c.AnySimulated(),
-                    "MakeDevices needs the simulated robot when a device is simulated");
-  device::RobotDevices dev;
-  if (twin != nullptr) dev = twin->TakeDevices();
+namespace {
+
+using LinkOpener = std::function<std::unique_ptr<drivers::ByteLink>(const std::string& key)>;
+
+// The real serial drivers `c` names, on the links `open` gives for their keys, reading `clock`,
+// into `dev`; the laser board's driver (the cameras take its latches), null when none.
+std::shared_ptr<drivers::LaserBoard> MakeSerialDrivers(const cfg::DevicesConfig& c,
+                                                       const LinkOpener& open, Clock& clock,
+                                                       device::RobotDevices* dev) {
   for (Side side : {Side::kLeft, Side::kRight}) {
     const int i = static_cast<int>(side);
     const std::string name(device::ToString(side));
     if (const auto* arm = c.Backend<cfg::Val2Backend>("arm_" + name)) {
-      dev.arm[i] = std::make_unique<drivers::Val2Arm>(OpenPort(s, "arm_" + name), arm->options);
+      dev->arm[i] = std::make_unique<drivers::Val2Arm>(open("arm_" + name), arm->options, clock);
     }
     if (const auto* hand = c.Backend<cfg::SensorHandBackend>("hand_" + name)) {
-      dev.hand[i] =
-          std::make_unique<drivers::SensorHandHand>(OpenPort(s, "hand_" + name), hand->options);
+      dev->hand[i] =
+          std::make_unique<drivers::SensorHandHand>(open("hand_" + name), hand->options, clock);
     }
   }
   if (const auto* head = c.Backend<cfg::BiclopsBackend>("head")) {
-    dev.head = std::make_unique<drivers::BiclopsHead>(OpenPort(s, "head"), head->options);
+    dev->head = std::make_unique<drivers::BiclopsHead>(open("head"), head->options, clock);
   }
   // The laser and the LEDs hang on one board: one driver for both when both are real (the
   // loader has checked that they share the port and its settings; the laser's options win).
   std::shared_ptr<drivers::LaserBoard> board;
   for (const char* key : {"laser", "leds"}) {
     if (const auto* b = c.Backend<cfg::LaserBoardBackend>(key); b != nullptr && !board) {
-      board = std::make_shared<drivers::LaserBoard>(OpenPort(s, key), b->options);
+      board = std::make_shared<drivers::LaserBoard>(open(key), b->options, clock);
     }
   }
   if (c.Backend<cfg::LaserBoardBackend>("laser")) {
-    dev.laser = std::make_unique<drivers::BoardStripeLaser>(board);
+    dev->laser = std::make_unique<drivers::BoardStripeLaser>(board);
   }
   if (c.Backend<cfg::LaserBoardBackend>("leds")) {
-    dev.leds = std::make_unique<drivers::BoardLeds>(board);
+    dev->leds = std::make_unique<drivers::BoardLeds>(board);
   }
+  return board;
+}
+
+// Lockstep: every driver on the twin's in-process lines, the twin's cameras.
+device::RobotDevices MakeLockstepDevices(const sim::Scenario& s, Robot& robot) {
+  device::RobotDevices dev;
+  const LinkOpener open = [&robot](const std::string& key) {
+    return robot.lockstep->HostLink(key == "laser" || key == "leds" ? "laser_board" : key);
+  };
+  std::shared_ptr<drivers::LaserBoard> board =
+      MakeSerialDrivers(s.devices, open, *robot.clock, &dev);
+  sim::Twin* twin = robot.lockstep.get();
+  dev.cameras = std::make_unique<sim::LockstepCamera>(
+      *robot.clock, robot.frames, [twin] { return twin->Develop(); },
+      drivers::BoardLatchSource(board), dev.head.get());
+  return dev;
+}
+
+}  // namespace
+
+device::RobotDevices MakeDevices(const sim::Scenario& s, sim::SimRobot* twin) {
+  const cfg::DevicesConfig& c = s.devices;
+  HGRASP_DEMAND_MSG(twin != nullptr || !c.AnySimulated(),
+                    "MakeDevices needs the simulated robot when a device is simulated");
+  device::RobotDevices dev;
+  if (twin != nullptr) dev = twin->TakeDevices();
+  std::shared_ptr<drivers::LaserBoard> board = MakeSerialDrivers(
+      c, [&s](const std::string& key) { return OpenPort(s, key); }, Clock::Wall(), &dev);
   if (const auto* cameras = c.Backend<cfg::GstreamerBackend>("cameras")) {
     // The scenario loader has checked that the laser is on the board.
     drivers::LatchSource latch = drivers::BoardLatchSource(board);

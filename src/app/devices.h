@@ -5,6 +5,11 @@
 /// The simulated robot, its MuJoCo world and its EGL context are built only when some device
 /// is simulated: on the real robot nothing of the twin exists. The same binary drives the twin,
 /// the emulators and the robot.
+///
+/// In lockstep (`--lockstep`) every device is its real driver, talking to the twin (sim::Twin in
+/// lockstep) in this process in simulated time: no pty, no port, no wall clock. The drivers'
+/// options are the scenario's where its `devices` block names that driver (its ports unused),
+/// else their defaults; the cameras are the twin's (sim::LockstepCamera).
 
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -12,9 +17,13 @@
 #include <string>
 
 #include "app/safe_stop.h"
+#include "common/clock.h"
+#include "config/device_config.h"
 #include "device/robot_devices.h"
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
+#include "sim/twin/lockstep_camera.h"
+#include "sim/twin/twin.h"
 
 namespace hgrasp::app {
 
@@ -42,6 +51,11 @@ struct Robot {
   /// The simulated robot; null when every device is real. Declared first: the simulated
   /// devices refer to it, so it goes last.
   std::unique_ptr<sim::SimRobot> twin;
+  /// Lockstep: the clock of the whole run, the twin behind the real drivers and its cameras'
+  /// frames (before the devices, which talk to them). Null otherwise.
+  std::unique_ptr<SimClock> clock;
+  std::unique_ptr<sim::Twin> lockstep;
+  std::shared_ptr<sim::LockstepFrames> frames;
   device::RobotDevices devices;
   bool all_simulated = false;
 
@@ -71,7 +85,13 @@ bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
 /// `stop` polled meanwhile (a failure is Robot::start_failure). Throws hgrasp::InputError
 /// naming the field (devices.KEY.port, ...) and the system's reason when a port or pipeline
 /// cannot be opened.
-Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop = nullptr);
+/// With `lockstep`, every device on its real driver against the lockstep twin (above).
+Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop = nullptr,
+                bool lockstep = false);
+
+/// The devices block of a lockstep run: every device on its real driver, with the options the
+/// scenario's block gives that driver, else the defaults (cameras: none here, the twin's).
+drivers::DevicesConfig LockstepDevices(const drivers::DevicesConfig& given);
 
 /// The devices for `scenario`: the simulated ones from `twin` (null only when no device is
 /// simulated), the others opened on their ports. Throws as OpenRobot.

@@ -115,8 +115,9 @@ void SeedRange(const std::string& text, std::uint64_t* first, std::uint64_t* las
                       : number(std::string_view(text).substr(0, dots), first) &&
                             number(std::string_view(text).substr(dots + 2), last);
   if (!ok) {
-    throw hgrasp::InputError("", "--seeds", text,
-                             "a seed N or a range FIRST..LAST of non-negative integers, e.g. 1..20");
+    throw hgrasp::InputError(
+        "", "--seeds", text,
+        "a seed N or a range FIRST..LAST of non-negative integers, e.g. 1..20");
   }
 }
 
@@ -134,8 +135,9 @@ int main(int argc, char** argv) {
   cmd_render->add_option("scenario", render.scenario, "scenario YAML file")->required();
   cmd_render->add_option("--out", render.out_dir, "output directory")->required();
   std::vector<std::string> encoder_text;  // parsed below, so a bad one is named with its range
-  cmd_render->add_option("--encoder", encoder_text,
-                         "laser encoder counts to render the stripe at (0.01 deg/count)")
+  cmd_render
+      ->add_option("--encoder", encoder_text,
+                   "laser encoder counts to render the stripe at (0.01 deg/count)")
       ->type_name("COUNT");
 
   hgrasp::app::CalibrateLaserOptions calibrate;
@@ -157,8 +159,8 @@ int main(int argc, char** argv) {
       "writes the cameras file the scanner reads");
   cmd_calibrate_cameras->add_option("scenario", calibrate_cameras.scenario, "scenario YAML file")
       ->required();
-  cmd_calibrate_cameras->add_option("--out", calibrate_cameras.out_file,
-                                    "camera intrinsics YAML to write")
+  cmd_calibrate_cameras
+      ->add_option("--out", calibrate_cameras.out_file, "camera intrinsics YAML to write")
       ->required();
   cmd_calibrate_cameras->add_option("--report", calibrate_cameras.report_file,
                                     "JSON report: views, fit, and the twin's truth");
@@ -232,6 +234,9 @@ int main(int argc, char** argv) {
                       "write the state-changing commands each real driver had its device "
                       "execute into FILE (JSON, keyed as the twin's twin.json \"commands\"), "
                       "once the robot is left safe");
+  cmd_run->add_flag("--lockstep", run.lockstep,
+                    "every device on its real driver against the twin, in simulated time, in "
+                    "this process (no pty; twin.json beside the report)");
 
   hgrasp::app::GenerateOptions generate;
   std::string generate_seeds = "1";
@@ -328,7 +333,8 @@ int main(int argc, char** argv) {
                        "every serial line");
   cmd_twin->add_option("--dropouts", twin.dropouts_per_s,
                        "fault: mean dropouts per second on every serial line (both ways silent)");
-  cmd_twin->add_option("--dropout-s", twin.dropout_s, "fault: length of a dropout (s, default 0.2)");
+  cmd_twin->add_option("--dropout-s", twin.dropout_s,
+                       "fault: length of a dropout (s, default 0.2)");
   cmd_twin->add_option("--dropout-gap-s", twin.dropout_gap_s,
                        "fault: least time a line works between two dropouts (s, default: one "
                        "dropout's length; 0 lets two make one longer outage)");

@@ -2,10 +2,10 @@
 // pictures, the left camera's video and the report; the simulator's ground truth added to the
 // report only when every device is simulated (never given to the pipeline).
 
-#include <cmath>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -95,7 +95,7 @@ int Run(const RunOptions& o) {
   CheckCommandLogPath(o.command_log);
   const StopSignals signals;
   config.stop = signals.request();
-  Robot robot = OpenRobot(scenario, signals.request());
+  Robot robot = OpenRobot(scenario, signals.request(), o.lockstep);
   if (EndedAtStart(robot, scenario, &out_dir, "run")) {
     WriteCommandLog(o.command_log, robot.devices);
     return 1;
@@ -194,8 +194,8 @@ int Run(const RunOptions& o) {
   WriteCommandLog(o.command_log, dev);
   const task::TaskResult& r = task.result();
 
-  nlohmann::json report = LookReport(scenario, look_truth ? &*look_truth : nullptr, r,
-                                     robot_model, true, out_dir.staging(), o.lean);
+  nlohmann::json report = LookReport(scenario, look_truth ? &*look_truth : nullptr, r, robot_model,
+                                     true, out_dir.staging(), o.lean);
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
@@ -268,6 +268,10 @@ int Run(const RunOptions& o) {
   }
   if (video.isOpened()) video.release();
   WriteFileWhole(out_dir.Path("report.json"), report.dump(2) + "\n");
+  if (robot.lockstep) {
+    // The twin's account: truth, exposures, every command its emulators executed.
+    WriteFileWhole(out_dir.Path("twin.json"), robot.lockstep->Report().dump(1) + "\n");
+  }
   out_dir.Commit();
 
   std::string servo;
@@ -280,9 +284,8 @@ int Run(const RunOptions& o) {
       "{:.1f} s, wall {:.1f} s ({:.2f}x real time); {} pictures; wrote {}",
       ok ? "lifted" : std::string(task::ToString(r.failure)), servo,
       r.box_rise && r.box_rise->consistent() ? 1e3 * r.box_rise->min_m : std::nan(""),
-      1e3 * r.gripper_rise_m,
-      r.device_s, Seconds(t0), r.device_s > 0 ? r.device_s / Seconds(t0) : 0.0, pictures,
-      o.out_dir);
+      1e3 * r.gripper_rise_m, r.device_s, Seconds(t0),
+      r.device_s > 0 ? r.device_s / Seconds(t0) : 0.0, pictures, o.out_dir);
   if (!ok) spdlog::warn("run: {}: {}", task::ToString(r.failure), r.message);
   return ok ? 0 : 1;
 }

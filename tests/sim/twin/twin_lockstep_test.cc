@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
-#include <string>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "common/clock.h"
@@ -45,8 +45,9 @@ struct LockstepRig {
                                              clock);
     hand = std::make_unique<drivers::SensorHandHand>(twin->HostLink("hand_right"),
                                                      drivers::SensorHandOptions{}, clock);
-    camera =
-        std::make_unique<LockstepCamera>(clock, frames, drivers::BoardLatchSource(board), nullptr);
+    Twin* t = twin.get();
+    camera = std::make_unique<LockstepCamera>(
+        clock, frames, [t] { return t->Develop(); }, drivers::BoardLatchSource(board), nullptr);
   }
   ~LockstepRig() {
     camera.reset();
