@@ -50,9 +50,9 @@ SerialLine::SerialLine(std::string key, std::unique_ptr<drivers::DeviceEmulator>
 }
 
 SerialLine::SerialLine(std::string key, std::unique_ptr<drivers::DeviceEmulator> device, int baud,
-                       std::optional<drivers::FaultPlan> faults)
+                       std::optional<drivers::FaultPlan> faults, const Clock& clock)
     : key_(std::move(key)), device_(std::move(device)), baud_(baud), byte_s_(10.0 / baud) {
-  if (faults) faults_.emplace(*faults);
+  if (faults) faults_.emplace(*faults, clock);
 }
 
 SerialLine::~SerialLine() = default;

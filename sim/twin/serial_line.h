@@ -29,9 +29,10 @@ class SerialLine {
   /// `baud`: 8N1 bytes take 10 / baud s each, both ways. `faults`: none when nullopt.
   SerialLine(std::string key, std::unique_ptr<drivers::DeviceEmulator> device,
              std::string link_path, int baud, std::optional<drivers::FaultPlan> faults);
-  /// In process (lockstep): no pty; the host talks through HostLink.
+  /// In process (lockstep): no pty; the host talks through HostLink. The faults' dropouts
+  /// follow `clock` (the lockstep twin's; it must outlive the line).
   SerialLine(std::string key, std::unique_ptr<drivers::DeviceEmulator> device, int baud,
-             std::optional<drivers::FaultPlan> faults);
+             std::optional<drivers::FaultPlan> faults, const Clock& clock);
   ~SerialLine();
 
   /// In process only: the host's end of the wires, a ByteLink whose Read waits on `clock` (the

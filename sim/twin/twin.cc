@@ -94,7 +94,8 @@ Twin::Twin(Scenario scenario, const TwinOptions& options, FrameSink sink)
     std::optional<drivers::FaultPlan> faults = options.faults;
     if (faults) faults->seed += 7919u * static_cast<unsigned>(index);
     if (options.lockstep != nullptr) {
-      lines_.push_back(std::make_unique<SerialLine>(key, std::move(device), spec.baud, faults));
+      lines_.push_back(std::make_unique<SerialLine>(key, std::move(device), spec.baud, faults,
+                                                    *options.lockstep));
     } else {
       const std::string link = options.dir.empty() ? "" : options.dir + "/" + key;
       lines_.push_back(

@@ -139,6 +139,9 @@ class Twin {
 
   /// Twin time now (the world's).
   double time() const { return world_->time(); }
+  /// Twin time when it began serving (Run's start, or the lockstep twin's construction): the
+  /// origin of --at times and of twin.json's control times.
+  double start_time() const { return t0_; }
   World& world() { return *world_; }
   SerialLine* line(const std::string& key);
   std::vector<SerialLine*> lines();

@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "app/twin_faults.h"
+
 namespace hgrasp::app {
 
 struct RenderOptions {
@@ -96,6 +98,8 @@ struct RunOptions {
   /// Every device on its real driver against the twin in simulated time, in this process
   /// (app/devices.h); the twin's report (truth, its command logs) written as twin.json.
   bool lockstep = false;
+  /// With lockstep: faults on the twin's serial lines and control commands at twin times.
+  TwinWireOptions wires;
 };
 
 /// `hgrasp run`: the whole task (look, plan, approach, servo, close, lift): the outputs of
@@ -186,14 +190,8 @@ struct TwinCommandOptions {
   std::optional<double> seconds;         ///< stop after this long (twin time); else at a signal
   std::string camera_host = "127.0.0.1";
   std::array<int, 2> camera_ports = {5600, 5601};  ///< TCP ports of the streams (0: any free)
-  double corrupt = 0.0;                            ///< per byte and direction, on every serial line
-  double dropouts_per_s = 0.0;                     ///< mean rate of dropouts on every serial line
-  double dropout_s = 0.2;                          ///< length of a dropout (s)
-  /// Least time a line works between two dropouts (s); unset: one dropout's length, so that
-  /// every outage is one dropout long (FaultPlan::min_dropout_gap_s).
-  std::optional<double> dropout_gap_s;
-  std::vector<std::string> at;  ///< "SECONDS:COMMAND" (Twin::Control) at that twin time
-  std::string head_options;     ///< the Biclops driver's options in devices.yaml (YAML flow)
+  TwinWireOptions wires;     ///< faults on the serial lines, control commands at twin times
+  std::string head_options;  ///< the Biclops driver's options in devices.yaml (YAML flow)
 };
 
 /// `hgrasp twin`: the twin behind the real wires (src/app/twin_command.cc).

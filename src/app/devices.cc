@@ -95,6 +95,9 @@ bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
   const StartFailure& f = *robot.start_failure;
   if (out != nullptr) {
     WriteFileWhole(out->Path("report.json"), f.Report(scenario, safe).dump(2) + "\n");
+    if (robot.lockstep) {
+      WriteFileWhole(out->Path("twin.json"), robot.lockstep->Report().dump(1) + "\n");
+    }
     out->Commit();
   }
   spdlog::error("{}: {}: {}{}", command, f.failure(), f.detail,
@@ -117,10 +120,12 @@ drivers::DevicesConfig LockstepDevices(const drivers::DevicesConfig& given) {
   return c;
 }
 
-Robot OpenRobot(const sim::Scenario& given, const StopRequest* stop, bool lockstep) {
+Robot OpenRobot(const sim::Scenario& given, const StopRequest* stop,
+                const TwinWireOptions* lockstep) {
   Robot robot;
   sim::Scenario lockstep_scenario;
-  if (lockstep) {
+  if (lockstep != nullptr) {
+    const std::vector<ScheduledControl> schedule = CheckTwinWires(*lockstep);
     lockstep_scenario = given;
     lockstep_scenario.devices = LockstepDevices(given.devices);
     robot.clock = std::make_unique<SimClock>();
@@ -128,17 +133,27 @@ Robot OpenRobot(const sim::Scenario& given, const StopRequest* stop, bool lockst
     sim::TwinOptions options;
     options.lockstep = robot.clock.get();
     options.seed = given.seed + 1;  // as `hgrasp twin` seeds it
+    options.faults = FaultPlanFor(*lockstep, given);
     // The twin's world is the scenario's, its devices all simulated (they are the twin's).
     sim::Scenario world = given;
     world.devices = {};
     robot.lockstep = std::make_unique<sim::Twin>(std::move(world), options,
                                                  sim::LockstepFrames::SinkFor(robot.frames));
+    sim::Twin* twin = robot.lockstep.get();
+    const double t_start = twin->time();
+    for (const ScheduledControl& c : schedule) {
+      robot.clock->At(Clock::TimePoint(Clock::FromSeconds(t_start + c.t_s)), [twin, c, t_start] {
+        const std::string err = twin->Control(c.command);
+        spdlog::info("twin: t = {:.3f} s: {}{}{}", twin->time() - t_start, c.command,
+                     err.empty() ? "" : ": ", err);
+      });
+    }
   }
-  const sim::Scenario& scenario = lockstep ? lockstep_scenario : given;
+  const sim::Scenario& scenario = lockstep != nullptr ? lockstep_scenario : given;
   robot.all_simulated = scenario.devices.AllSimulated();
   if (scenario.devices.AnySimulated()) robot.twin = std::make_unique<sim::SimRobot>(scenario);
-  robot.devices =
-      lockstep ? MakeLockstepDevices(scenario, robot) : MakeDevices(scenario, robot.twin.get());
+  robot.devices = lockstep != nullptr ? MakeLockstepDevices(scenario, robot)
+                                      : MakeDevices(scenario, robot.twin.get());
   // A stock SensorHand measures no finger position: its driver integrates the commanded speeds
   // from an assumed start. A real hand that holds nothing opens to its end stop, where the
   // opening is known exactly; one that grips (a box held since the last run) keeps gripping.

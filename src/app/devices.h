@@ -17,6 +17,7 @@
 #include <string>
 
 #include "app/safe_stop.h"
+#include "app/twin_faults.h"
 #include "common/clock.h"
 #include "config/device_config.h"
 #include "device/robot_devices.h"
@@ -85,9 +86,11 @@ bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
 /// `stop` polled meanwhile (a failure is Robot::start_failure). Throws hgrasp::InputError
 /// naming the field (devices.KEY.port, ...) and the system's reason when a port or pipeline
 /// cannot be opened.
-/// With `lockstep`, every device on its real driver against the lockstep twin (above).
+/// With `lockstep`, every device on its real driver against the lockstep twin (above), its
+/// wires as `*lockstep` asks (faults; control commands at twin times, logged as they run).
+/// Throws hgrasp::InputError for wire options out of range.
 Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop = nullptr,
-                bool lockstep = false);
+                const TwinWireOptions* lockstep = nullptr);
 
 /// The devices block of a lockstep run: every device on its real driver, with the options the
 /// scenario's block gives that driver, else the defaults (cameras: none here, the twin's).

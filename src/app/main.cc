@@ -17,6 +17,24 @@
 
 namespace {
 
+// The twin's faults and control commands (`twin`, `run --lockstep`): app/twin_faults.h.
+void AddWireOptions(CLI::App* cmd, hgrasp::app::TwinWireOptions* w) {
+  cmd->add_option("--corrupt", w->corrupt,
+                  "fault: probability that a byte is corrupted, per byte and direction, on every "
+                  "serial line");
+  cmd->add_option("--dropouts", w->dropouts_per_s,
+                  "fault: mean dropouts per second on every serial line (both ways silent)");
+  cmd->add_option("--dropout-s", w->dropout_s, "fault: length of a dropout (s, default 0.2)");
+  cmd->add_option("--dropout-gap-s", w->dropout_gap_s,
+                  "fault: least time a line works between two dropouts (s, default: one "
+                  "dropout's length; 0 lets two make one longer outage)");
+  cmd->add_option("--fault-seed", w->fault_seed,
+                  "fault: the faults' seed (default: drawn from the scenario's seed)");
+  cmd->add_option("--at", w->at,
+                  "SECONDS:COMMAND: run a control command at that twin time (repeatable): "
+                  "cut|cut_tx|mend|vanish|reappear DEVICE, stop|resume cameras");
+}
+
 // The message for the first word of the command line that should name a command (or a
 // subcommand of one) and names none; empty when every such word is known. Options and their
 // values are left to CLI11.
@@ -236,7 +254,9 @@ int main(int argc, char** argv) {
                       "once the robot is left safe");
   cmd_run->add_flag("--lockstep", run.lockstep,
                     "every device on its real driver against the twin, in simulated time, in "
-                    "this process (no pty; twin.json beside the report)");
+                    "this process (no pty; twin.json beside the report); with the faults and "
+                    "commands below on the twin's wires");
+  AddWireOptions(cmd_run, &run.wires);
 
   hgrasp::app::GenerateOptions generate;
   std::string generate_seeds = "1";
@@ -328,19 +348,7 @@ int main(int argc, char** argv) {
   cmd_twin->add_option("--camera-ports", twin.camera_ports,
                        "TCP ports of the left and right streams on 127.0.0.1 (0: any free; "
                        "default 5600 5601)");
-  cmd_twin->add_option("--corrupt", twin.corrupt,
-                       "fault: probability that a byte is corrupted, per byte and direction, on "
-                       "every serial line");
-  cmd_twin->add_option("--dropouts", twin.dropouts_per_s,
-                       "fault: mean dropouts per second on every serial line (both ways silent)");
-  cmd_twin->add_option("--dropout-s", twin.dropout_s,
-                       "fault: length of a dropout (s, default 0.2)");
-  cmd_twin->add_option("--dropout-gap-s", twin.dropout_gap_s,
-                       "fault: least time a line works between two dropouts (s, default: one "
-                       "dropout's length; 0 lets two make one longer outage)");
-  cmd_twin->add_option("--at", twin.at,
-                       "SECONDS:COMMAND: run a control command at that twin time (repeatable): "
-                       "cut|cut_tx|mend|vanish|reappear DEVICE, stop|resume cameras");
+  AddWireOptions(cmd_twin, &twin.wires);
   cmd_twin->add_option("--head-options", twin.head_options,
                        "the Biclops driver's options written into devices.yaml (YAML flow)");
 

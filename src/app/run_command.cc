@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/devices.h"
@@ -95,7 +96,12 @@ int Run(const RunOptions& o) {
   CheckCommandLogPath(o.command_log);
   const StopSignals signals;
   config.stop = signals.request();
-  Robot robot = OpenRobot(scenario, signals.request(), o.lockstep);
+  if (!o.lockstep && o.wires.any()) {
+    throw InputError("", "--lockstep", "not given",
+                     "given with --corrupt, --dropouts or --at (the twin's wires are in process "
+                     "only in lockstep; against `hgrasp twin`, give them to it)");
+  }
+  Robot robot = OpenRobot(scenario, signals.request(), o.lockstep ? &o.wires : nullptr);
   if (EndedAtStart(robot, scenario, &out_dir, "run")) {
     WriteCommandLog(o.command_log, robot.devices);
     return 1;
@@ -184,6 +190,10 @@ int Run(const RunOptions& o) {
     return closed;
   };
   const bool ok = planned && task.Approach() && task.Servo() && close() && task.Lift();
+  // Lockstep: when the task ended on the twin's clock (since it started, as its --at times).
+  const std::optional<double> task_end_twin_s =
+      robot.lockstep ? std::optional<double>(robot.lockstep->time() - robot.lockstep->start_time())
+                     : std::nullopt;
   if (!ok) {
     // Said at once, before the safe stop (which may take a while on slow lines).
     spdlog::warn("run: {} ({}): leaving the robot safe", task::ToString(task.result().failure),
@@ -256,6 +266,7 @@ int Run(const RunOptions& o) {
   // Simulated (device) time against wall time, per stage and for the whole task.
   report["stages"] = stages;
   report["device_time_s"] = r.device_s;
+  if (task_end_twin_s) report["lockstep"] = {{"task_end_twin_s", *task_end_twin_s}};
   report["wall_time_s"] = r.wall_s;
   if (sim_truth) {
     if (target_object != nullptr) {

@@ -25,6 +25,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/twin_faults.h"
 #include "camera/gst_stereo_server.h"
 #include "common/error.h"
 #include "common/write_file.h"
@@ -41,28 +42,6 @@ std::atomic<int> g_stop_signal{0};
 
 void OnStopSignal(int sig) { g_stop_signal = sig; }
 
-// A scheduled control command: "T:COMMAND" (T in twin seconds since the start).
-struct Scheduled {
-  double t_s = 0.0;
-  std::string command;
-  bool done = false;
-};
-
-std::vector<Scheduled> ParseSchedule(const std::vector<std::string>& at) {
-  std::vector<Scheduled> v;
-  for (const std::string& a : at) {
-    const size_t colon = a.find(':');
-    char* end = nullptr;
-    const double t = colon == std::string::npos ? -1.0 : std::strtod(a.c_str(), &end);
-    if (colon == std::string::npos || end != a.c_str() + colon || !(t >= 0.0) ||
-        !std::isfinite(t)) {
-      throw InputError("", "--at", a, "SECONDS:COMMAND, e.g. 12.5:cut arm_right");
-    }
-    v.push_back({t, a.substr(colon + 1)});
-  }
-  return v;
-}
-
 }  // namespace
 
 int Twin(const TwinCommandOptions& o) {
@@ -73,21 +52,8 @@ int Twin(const TwinCommandOptions& o) {
   if (o.seconds && !(*o.seconds > 0.0 && std::isfinite(*o.seconds))) {
     throw InputError("", "--seconds", std::to_string(*o.seconds), "a time in seconds, > 0");
   }
-  if (!(o.corrupt >= 0.0 && o.corrupt < 0.5)) {
-    throw InputError("", "--corrupt", std::to_string(o.corrupt), "a probability in [0, 0.5)");
-  }
-  if (!(o.dropouts_per_s >= 0.0 && o.dropouts_per_s <= 10.0)) {
-    throw InputError("", "--dropouts", std::to_string(o.dropouts_per_s),
-                     "dropouts per second, 0-10");
-  }
-  if (!(o.dropout_s > 0.0 && o.dropout_s <= 5.0)) {
-    throw InputError("", "--dropout-s", std::to_string(o.dropout_s), "seconds, > 0 and <= 5");
-  }
-  if (o.dropout_gap_s && !(*o.dropout_gap_s >= 0.0 && *o.dropout_gap_s <= 60.0)) {
-    throw InputError("", "--dropout-gap-s", std::to_string(*o.dropout_gap_s),
-                     "seconds, 0-60");
-  }
-  std::vector<Scheduled> schedule = ParseSchedule(o.at);
+  const std::vector<ScheduledControl> schedule = CheckTwinWires(o.wires);
+  std::vector<bool> done(schedule.size(), false);
   sim::Scenario scenario = sim::LoadScenario(o.scenario);
   std::error_code ec;
   fs::create_directories(o.dir, ec);
@@ -108,15 +74,7 @@ int Twin(const TwinCommandOptions& o) {
   options.dir = fs::absolute(o.dir).lexically_normal().string();
   options.rate = o.rate;
   options.seed = scenario.seed + 1;
-  if (o.corrupt > 0.0 || o.dropouts_per_s > 0.0) {
-    drivers::FaultPlan plan;
-    plan.corrupt_probability = o.corrupt;
-    plan.dropouts_per_s = o.dropouts_per_s;
-    plan.dropout_s = o.dropout_s;
-    plan.min_dropout_gap_s = o.dropout_gap_s.value_or(o.dropout_s);
-    plan.seed = scenario.seed * 1000003u + 17u;
-    options.faults = plan;
-  }
+  options.faults = FaultPlanFor(o.wires, scenario);
   drivers::GstStereoServer* server = cameras.get();
   sim::FrameSink sink = [server](int camera, const cv::Mat& bgr, std::uint64_t frame,
                                  double exposure_s) {
@@ -157,9 +115,9 @@ int Twin(const TwinCommandOptions& o) {
   sigaction(SIGTERM, &sa, nullptr);
   signal(SIGPIPE, SIG_IGN);
 
-  std::fprintf(stderr, "twin: %s at rate %g; ports in %s; cameras %s | %s\n",
-               scenario.name.c_str(), o.rate, options.dir.c_str(),
-               cameras->ClientPipeline(0).c_str(), cameras->ClientPipeline(1).c_str());
+  std::fprintf(stderr, "twin: %s at rate %g; ports in %s; cameras %s | %s\n", scenario.name.c_str(),
+               o.rate, options.dir.c_str(), cameras->ClientPipeline(0).c_str(),
+               cameras->ClientPipeline(1).c_str());
   std::fprintf(stderr, "twin: run against it with: hgrasp run %s/scenario.yaml --out DIR\n",
                options.dir.c_str());
   WriteFileWhole(options.dir + "/ready", "ready\n");
@@ -173,10 +131,10 @@ int Twin(const TwinCommandOptions& o) {
     if (g_stop_signal != 0) return false;
     const double t = twin.time() - t_start;
     if (o.seconds && t >= *o.seconds) return false;
-    for (Scheduled& s : schedule) {
-      if (!s.done && t >= s.t_s) {
-        s.done = true;
-        run_control(s.command);
+    for (std::size_t i = 0; i < schedule.size(); ++i) {
+      if (!done[i] && t >= schedule[i].t_s) {
+        done[i] = true;
+        run_control(schedule[i].command);
       }
     }
     if (control_fd >= 0) {

@@ -3,13 +3,18 @@
 // process. Run twice: the same command logs byte for byte, the same twin record and the same
 // report (wall-clock timings aside), whatever else the machine is doing; and by the twin's
 // truth the gripper was where the plan put it when the hand closed, and the box rose.
+// And the right arm's link cut both ways during the servo, at a twin time (--at): the run ends
+// with device_error naming arm_right within 0.5 s of twin time, exit 1, the laser and the LEDs
+// off; no ABORT can reach the controller, which finishes the motion it was running and stops.
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 
 #include "cli_util.h"
@@ -21,20 +26,8 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::ReadJson;
+using testing::WithoutWallTimes;
 using testing::ReadText;
-
-// `j` without the keys that measure the machine rather than the run.
-json WithoutWallTimes(json j) {
-  if (j.is_object()) {
-    for (const char* k : {"timing_s", "wall_time_s", "wall_s", "mean_render_ms", "max_render_ms"}) {
-      j.erase(k);
-    }
-    for (auto& [k, v] : j.items()) v = WithoutWallTimes(v);
-  } else if (j.is_array()) {
-    for (auto& v : j) v = WithoutWallTimes(v);
-  }
-  return j;
-}
 
 Eigen::Vector3d Vec(const json& j) {
   return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
@@ -68,8 +61,8 @@ TEST(CliLockstep, TheWholeGraspThroughTheRealDriversTwiceTheSame) {
   EXPECT_EQ(twin["frames"].value("overruns", -1), 0);
   // Every serial device was driven through its wire.
   const json commands = json::parse(logs[0]);
-  for (const char* key : {"arm_left", "arm_right", "hand_left", "hand_right", "head",
-                          "laser_board"}) {
+  for (const char* key :
+       {"arm_left", "arm_right", "hand_left", "hand_right", "head", "laser_board"}) {
     ASSERT_TRUE(commands.contains(key)) << key;
   }
   EXPECT_FALSE(commands["arm_right"].empty());
@@ -94,10 +87,81 @@ TEST(CliLockstep, TheWholeGraspThroughTheRealDriversTwiceTheSame) {
   double rise = 0.0;
   for (const json& b : twin["truth"]["boxes"]) rise = std::max(rise, b["rise_m"].get<double>());
   EXPECT_GT(rise, 0.045);
-  std::printf("lockstep run: gripper %.2f mm from the plan at the close, box up %.1f mm; "
-              "device time %.1f s, wall %.1f s and %.1f s\n",
-              err_mm, 1e3 * rise, report.value("device_time_s", 0.0),
-              reports[0].value("wall_time_s", 0.0), reports[1].value("wall_time_s", 0.0));
+  std::printf(
+      "lockstep run: gripper %.2f mm from the plan at the close, box up %.1f mm; "
+      "device time %.1f s, wall %.1f s and %.1f s\n",
+      err_mm, 1e3 * rise, report.value("device_time_s", 0.0), reports[0].value("wall_time_s", 0.0),
+      reports[1].value("wall_time_s", 0.0));
+  fs::remove_all(dir);
+}
+
+// The twin time (since the twin started) at which the lockstep run of `scene` begins its servo:
+// from its log ("run: servo_start (device time T s)", the frames' clock: the twin's world time)
+// less the twin's start (twin.json t0_s).
+double ServoStartTwinTime(const std::string& scene, const fs::path& out) {
+  const auto r =
+      testing::RunHgrasp("run " + scene + " --lockstep --lean --out " + out.string(), 600);
+  std::smatch m;
+  const std::regex servo(R"(run: servo_start \(device time ([0-9.]+) s\))");
+  if (r.status != 0 || !std::regex_search(r.output, m, servo)) return -1.0;
+  const json twin = ReadJson(out / "twin.json");
+  return std::stod(m[1].str()) - twin.value("t0_s", 0.0);
+}
+
+TEST(CliLockstep, TheRightArmsLinkCutBothWaysDuringTheServo) {
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_lockstep_cut";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string scene = std::string(HGRASP_ROOT_DIR) + "/scenarios/default.yaml";
+  const double servo_t = ServoStartTwinTime(scene, dir / "clean");
+  ASSERT_GT(servo_t, 0.0) << "the clean run did not reach the servo";
+  const double cut_t = servo_t + 0.5;
+  char at[64];
+  std::snprintf(at, sizeof at, "%.3f:cut arm_right", cut_t);
+  std::string logs[2];
+  json report, twin;
+  for (int i = 0; i < 2; ++i) {
+    const fs::path out = dir / ("cut" + std::to_string(i));
+    const fs::path log = dir / ("commands" + std::to_string(i) + ".json");
+    const auto r = testing::RunHgrasp("run " + scene + " --lockstep --lean --out " + out.string() +
+                                          " --at '" + at + "' --command-log " + log.string(),
+                                      600);
+    EXPECT_EQ(r.status, 1) << r.output;
+    logs[i] = ReadText(log.string());
+    report = ReadJson(out / "report.json");
+    twin = ReadJson(out / "twin.json");
+    ASSERT_TRUE(report.is_object()) << r.output;
+    ASSERT_TRUE(twin.is_object()) << r.output;
+  }
+  EXPECT_EQ(logs[0], logs[1]);  // the same every run
+  EXPECT_EQ(report.value("failure", ""), "device_error") << report.dump(1);
+  ASSERT_TRUE(report["failed_device"].is_string()) << report.dump(1);
+  EXPECT_EQ(report["failed_device"].get<std::string>(), "arm_right");
+  // Noticed within 0.5 s of twin time (the driver's 0.45 s silence budget).
+  ASSERT_EQ(twin["controls"].size(), 1u) << twin["controls"].dump();
+  const double cut_twin = twin["controls"][0]["t_s"].get<double>();
+  const double noticed = report["lockstep"]["task_end_twin_s"].get<double>() - cut_twin;
+  EXPECT_GE(noticed, 0.0);
+  EXPECT_LE(noticed, 0.5);
+  // Laser and LEDs off: as the safe stop reports them, and truly.
+  const json safe = report.value("safe_stop", json::object());
+  EXPECT_EQ(safe.value("laser", json::object()).value("laser off", ""), "ok") << safe.dump();
+  EXPECT_EQ(safe.value("leds", json::object()).value("left off", ""), "ok") << safe.dump();
+  EXPECT_EQ(safe.value("leds", json::object()).value("right off", ""), "ok") << safe.dump();
+  EXPECT_FALSE(twin["truth"]["laser_on"].get<bool>());
+  EXPECT_EQ(twin["truth"]["leds"]["left"].get<int>(), 0);
+  EXPECT_EQ(twin["truth"]["leds"]["right"].get<int>(), 0);
+  // No ABORT reaches a controller cut off both ways: it ran no command after the cut, finished
+  // the motion in progress and stands (the twin's joints).
+  const double cut_world = cut_twin + twin["t0_s"].get<double>();
+  const json& times = twin["command_times_s"]["arm_right"];
+  for (const json& t : times) EXPECT_LT(t.get<double>(), cut_world) << "a command after the cut";
+  const double last_moving = twin["truth"]["arms"]["right"]["last_moving_t_s"].get<double>();
+  std::printf(
+      "arm link cut at twin %.3f s (servo from %.3f s): device_error %.3f s after it; "
+      "the arm moved on %.3f s (finishing its move), then stood\n",
+      cut_twin, servo_t, noticed, std::max(0.0, last_moving - cut_world));
+  EXPECT_LT(last_moving - cut_world, 1.0);
   fs::remove_all(dir);
 }
 

@@ -32,6 +32,20 @@ inline nlohmann::json ReadJson(const std::filesystem::path& p) {
   return nlohmann::json::parse(f, nullptr, /*allow_exceptions=*/false);
 }
 
+/// A report or twin record without the keys that measure the machine rather than the run
+/// (wall-clock timings, render times): what two runs of one scenario in simulated time share.
+inline nlohmann::json WithoutWallTimes(nlohmann::json j) {
+  if (j.is_object()) {
+    for (const char* k : {"timing_s", "wall_time_s", "wall_s", "mean_render_ms", "max_render_ms"}) {
+      j.erase(k);
+    }
+    for (auto& [k, v] : j.items()) v = WithoutWallTimes(v);
+  } else if (j.is_array()) {
+    for (auto& v : j) v = WithoutWallTimes(v);
+  }
+  return j;
+}
+
 class TwinProcess {
  public:
   /// Starts `hgrasp twin SCENARIO --dir DIR --camera-ports 0 0 --head-options FAST EXTRA...`
