@@ -6,18 +6,24 @@
 // And the right arm's link cut both ways during the servo, at a twin time (--at): the run ends
 // with device_error naming arm_right within 0.5 s of twin time, exit 1, the laser and the LEDs
 // off; no ABORT can reach the controller, which finishes the motion it was running and stops.
+// And scenes end as their simulated-device runs do (the 30 random scenes with
+// HGRASP_LOCKSTEP_SEEDS=A..B; the suite runs one).
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include "cli_util.h"
+#include "run_compare.h"
 #include "twin_process.h"
 
 namespace hgrasp {
@@ -26,12 +32,9 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::ReadJson;
-using testing::WithoutWallTimes;
 using testing::ReadText;
-
-Eigen::Vector3d Vec(const json& j) {
-  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
-}
+using testing::Vec;
+using testing::WithoutWallTimes;
 
 TEST(CliLockstep, TheWholeGraspThroughTheRealDriversTwiceTheSame) {
   const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_lockstep";
@@ -163,6 +166,77 @@ TEST(CliLockstep, TheRightArmsLinkCutBothWaysDuringTheServo) {
       cut_twin, servo_t, noticed, std::max(0.0, last_moving - cut_world));
   EXPECT_LT(last_moving - cut_world, 1.0);
   fs::remove_all(dir);
+}
+
+// A scene through the real drivers in lockstep against its simulated-device run: the same
+// verdict; where the simulated run put the gripper within 5 mm / 2 deg of the plan, so does this
+// one (by the twin's truth at the close); the boxes within the scan's own repeatability (1.5 mm
+// centre, 2.5 mm edges, as cli_twin_test.cc). Returns whether it agreed; prints a line.
+bool AgreesWithTheSimulatedRun(const std::string& scene, const fs::path& dir) {
+  const std::string name = fs::path(scene).stem().string();
+  SCOPED_TRACE(name);
+  const fs::path sim_out = dir / (name + "_sim"), out = dir / (name + "_lockstep");
+  const auto sim = testing::RunHgrasp("run " + scene + " --lean --out " + sim_out.string(), 600);
+  const auto run =
+      testing::RunHgrasp("run " + scene + " --lockstep --lean --out " + out.string(), 600);
+  const json sim_report = ReadJson(sim_out / "report.json");
+  const json report = ReadJson(out / "report.json");
+  const json twin = ReadJson(out / "twin.json");
+  if (!sim_report.is_object() || !report.is_object() || !twin.is_object()) {
+    ADD_FAILURE() << sim.output << run.output;
+    return false;
+  }
+  bool agrees = true;
+  const json verdict = report.value("failure", json()),
+             sim_verdict = sim_report.value("failure", json());
+  EXPECT_EQ(verdict, sim_verdict) << run.output;
+  agrees &= verdict == sim_verdict;
+  const json at = sim_report.value("truth", json::object())
+                      .value("run", json::object())
+                      .value("grasp_reached", json::object());
+  const bool sim_on_plan =
+      at.value("gripper_to_plan_m", 1.0) < 0.005 && at.value("gripper_to_plan_deg", 99.0) < 2.0;
+  double mm = -1.0, deg = -1.0;
+  const bool gripped = testing::GripError(twin["truth"], report, &mm, &deg);
+  if (sim_on_plan) {
+    EXPECT_TRUE(gripped && mm < 5.0 && deg < 2.0) << mm << " mm, " << deg << " deg";
+    agrees &= gripped && mm < 5.0 && deg < 2.0;
+  }
+  const testing::BoxAgreement boxes = testing::CompareBoxes(report, sim_report);
+  EXPECT_LT(boxes.centre_m, 0.0015);
+  EXPECT_LT(boxes.size_m, 0.0025);
+  agrees &= boxes.centre_m < 0.0015 && boxes.size_m < 0.0025;
+  const double wall = report.value("wall_time_s", 0.0), robot = report.value("device_time_s", 0.0);
+  std::printf(
+      "%s: %s (simulated: %s); grip %.2f mm %.2f deg (simulated %.2f mm); boxes within "
+      "%.2f mm centre, %.2f mm edges; robot %.1f s in %.1f s wall (%.2fx real time)\n",
+      name.c_str(), verdict.is_null() ? "ok" : verdict.get<std::string>().c_str(),
+      sim_verdict.is_null() ? "ok" : sim_verdict.get<std::string>().c_str(), mm, deg,
+      1e3 * at.value("gripper_to_plan_m", -0.001), 1e3 * boxes.centre_m, 1e3 * boxes.size_m, robot,
+      wall, wall > 0.0 ? robot / wall : 0.0);
+  std::fflush(stdout);
+  return agrees;
+}
+
+TEST(CliLockstep, ScenesEndAsTheirSimulatedRunsDo) {
+  const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_lockstep_scenes";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::vector<std::string> scenes = {std::string(HGRASP_ROOT_DIR) +
+                                     "/tests/data/twin/random_6.yaml"};
+  if (const char* seeds = std::getenv("HGRASP_LOCKSTEP_SEEDS")) {
+    scenes.clear();
+    const auto r = testing::RunHgrasp("generate --family random_boxes --seeds " +
+                                      std::string(seeds) + " --out " + (dir / "scenes").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    for (const auto& e : fs::directory_iterator(dir / "scenes"))
+      scenes.push_back(e.path().string());
+    std::sort(scenes.begin(), scenes.end());
+  }
+  int agreed = 0;
+  for (const std::string& scene : scenes) agreed += AgreesWithTheSimulatedRun(scene, dir);
+  std::printf("%d of %zu scenes end as their simulated runs do\n", agreed, scenes.size());
+  if (!HasFailure()) fs::remove_all(dir);
 }
 
 }  // namespace

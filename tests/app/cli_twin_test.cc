@@ -2,9 +2,9 @@
 // every device on its wire, `hgrasp run` drives the VAL II consoles, the Biclops, the
 // SensorHands, the laser board and the GStreamer cameras through their drivers. Each scene is
 // run twice: simulated in lockstep, and through the wires in wall-clock time; the two must model
-// the same boxes (within 1.5 mm, see below), choose the same arm, and the twin's truth must show the gripper
-// within 5 mm / 2 deg of the plan when the hand began to close and the box lifted at least 45 mm
-// and still in the hand at the end.
+// the same boxes (within 1.5 mm, see below), choose the same arm, and the twin's truth must show
+// the gripper within 5 mm / 2 deg of the plan when the hand began to close and the box lifted at
+// least 45 mm and still in the hand at the end.
 //
 // CI runs the default scenario and one random scene (a minute of wall-clock time each): seed 6,
 // since seed 3's box hangs under the forearm after the lift, hidden from the laser, and the task
@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "cli_util.h"
+#include "run_compare.h"
 #include "twin_process.h"
 
 namespace hgrasp {
@@ -36,28 +37,9 @@ using nlohmann::json;
 
 using testing::ReadJson;
 
-Eigen::Vector3d Vec(const json& j) { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
-
-Eigen::Matrix3d Mat(const json& j) {
-  Eigen::Matrix3d R;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) R(r, c) = j[r][c].get<double>();
-  return R;
-}
-
-// The largest difference between two boxes' edge lengths, each edge of `a` against the edge of
-// `b` along the same direction (a box's axes may come in another order, or turned half a turn).
-double SizeError(const json& a, const json& b) {
-  const Eigen::Matrix3d Ra = Mat(a["R_WO"]), Rb = Mat(b["R_WO"]);
-  const Eigen::Vector3d sa = Vec(a["size"]), sb = Vec(b["size"]);
-  double worst = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    int along = 0;
-    (Rb.transpose() * Ra.col(i)).cwiseAbs().maxCoeff(&along);
-    worst = std::max(worst, std::abs(sa[i] - sb[along]));
-  }
-  return worst;
-}
+using testing::Mat;
+using testing::SizeError;
+using testing::Vec;
 
 std::vector<std::string> Scenes(const fs::path& dir) {
   std::vector<std::string> scenes = {
@@ -65,8 +47,9 @@ std::vector<std::string> Scenes(const fs::path& dir) {
       std::string(HGRASP_ROOT_DIR) + "/tests/data/twin/random_6.yaml"};
   if (const char* seeds = std::getenv("HGRASP_TWIN_SEEDS")) {
     scenes.push_back(std::string(HGRASP_ROOT_DIR) + "/tests/data/sweep/regression/random_106.yaml");
-    const auto r = testing::RunHgrasp("generate --family random_boxes --seeds " +
-                                      std::string(seeds) + " --out " + (dir / "generated").string());
+    const auto r =
+        testing::RunHgrasp("generate --family random_boxes --seeds " + std::string(seeds) +
+                           " --out " + (dir / "generated").string());
     EXPECT_EQ(r.status, 0) << r.output;
     std::vector<std::string> generated;
     for (const auto& e : fs::directory_iterator(dir / "generated")) {
@@ -93,7 +76,8 @@ TEST(CliTwin, TheWholeGraspThroughTheRealDriversMatchesTheSimulatedRun) {
     SCOPED_TRACE(name);
     // The simulated run first: scenes it does not lift (unreachable, say) say nothing here.
     const fs::path sim_out = dir / (name + "_sim");
-    const auto sim = testing::RunHgrasp("run " + scene + " --out " + sim_out.string() + " --lean", 300);
+    const auto sim =
+        testing::RunHgrasp("run " + scene + " --out " + sim_out.string() + " --lean", 300);
     const json sim_report = ReadJson(sim_out / "report.json");
     ASSERT_TRUE(sim_report.is_object()) << sim.output;
     if (!sim_report["result"].value("lifted", false)) {
@@ -200,13 +184,12 @@ TEST(CliTwin, TheWholeGraspThroughTheRealDriversMatchesTheSimulatedRun) {
       return std::acos(std::clamp(Mat(pose["R"])(2, 2), -1.0, 1.0)) * 180.0 / 3.14159265358979;
     };
     for (const auto& [object, pose] : close_stop["objects"].items()) {
-      std::printf("twin %s: %s tilted %.1f deg at the close's start, %.1f deg at its stop "
-                  "(%.3f s later, opening %.1f mm, %.1f N)\n",
-                  name.c_str(), object.c_str(), upright(close_start["objects"][object]),
-                  upright(pose),
-                  close_stop["t_s"].get<double>() - close_start["t_s"].get<double>(),
-                  1e3 * close_stop["opening_m"].get<double>(),
-                  close_stop["force_n"].get<double>());
+      std::printf(
+          "twin %s: %s tilted %.1f deg at the close's start, %.1f deg at its stop "
+          "(%.3f s later, opening %.1f mm, %.1f N)\n",
+          name.c_str(), object.c_str(), upright(close_start["objects"][object]), upright(pose),
+          close_stop["t_s"].get<double>() - close_start["t_s"].get<double>(),
+          1e3 * close_stop["opening_m"].get<double>(), close_stop["force_n"].get<double>());
     }
     // Lifted and held by truth: the highest box rose at least 45 mm and is in the hand.
     double rise = -1.0;
@@ -219,11 +202,10 @@ TEST(CliTwin, TheWholeGraspThroughTheRealDriversMatchesTheSimulatedRun) {
         "grip %.2f mm %.2f deg off the plan, rise %.1f mm; robot time %.1f s (simulated %.1f s), "
         "wall %.1f s; frames %d exposed, %d overruns, render %.1f ms mean\n",
         name.c_str(), 1e3 * worst_centre, 1e3 * worst_size,
-        static_cast<int>(report["result"].value("lifted", false)), err_mm, err_deg,
-        1e3 * rise, report.value("device_time_s", 0.0), sim_report.value("device_time_s", 0.0),
-        report["timing_s"].value("total", 0.0),
-        truth_all["frames"].value("exposures", 0), truth_all["frames"].value("overruns", 0),
-        truth_all["frames"].value("mean_render_ms", 0.0));
+        static_cast<int>(report["result"].value("lifted", false)), err_mm, err_deg, 1e3 * rise,
+        report.value("device_time_s", 0.0), sim_report.value("device_time_s", 0.0),
+        report["timing_s"].value("total", 0.0), truth_all["frames"].value("exposures", 0),
+        truth_all["frames"].value("overruns", 0), truth_all["frames"].value("mean_render_ms", 0.0));
   }
   EXPECT_GE(through_wires, std::getenv("HGRASP_TWIN_ONLY") != nullptr ? 1 : 2);
   if (!HasFailure()) fs::remove_all(dir);  // else kept, to look at
