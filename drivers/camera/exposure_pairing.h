@@ -33,6 +33,10 @@ enum class LatchPairing {
   kOffset,  ///< the latch of board frame = the frame's number + frame_offset
 };
 
+/// The most frames a camera drops from one stream to find the other's frame number: streams
+/// further apart than this do not count the same frames (kUnpairable, kBadReply).
+inline constexpr int kMaxPairingDrops = 8;
+
 /// The next step in pairing the two cameras' pending frames.
 enum class PairStep {
   kPaired,      ///< the two go together: same number, or a camera's frame carries none

@@ -74,7 +74,7 @@ class GstStereoCamera final : public device::StereoCamera {
   static constexpr int kQueuedFrames = 1;
   /// The most frames Grab drops from one camera to find the other's frame number; streams
   /// further apart than this do not count the same frames and Grab reports kBadReply.
-  static constexpr int kMaxPairingDrops = 8;
+  static constexpr int kMaxPairingDrops = drivers::kMaxPairingDrops;
 
   /// Opens and starts both pipelines. `latch` may be empty (no board: the count stays 0 and
   /// laser_on false); `head` may be null (joints stay 0); both must outlive the camera. Returns

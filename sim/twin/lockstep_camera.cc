@@ -6,9 +6,6 @@ namespace hgrasp::sim {
 
 using device::Status;
 
-// The most frames dropped from one camera to pair the two (GstStereoCamera::kMaxPairingDrops).
-constexpr int kMaxPairingDrops = 8;
-
 FrameSink LockstepFrames::SinkFor(const std::shared_ptr<LockstepFrames>& frames) {
   return [frames](int camera, const cv::Mat& bgr, std::uint64_t number, double t_s) {
     frames->Put(camera, bgr, number, t_s);
@@ -46,7 +43,7 @@ Status LockstepCamera::Grab(device::StereoFrame* frame) {
       return Status::kTimeout;
     }
     const std::uint64_t a = f.pending(0)->number, b = f.pending(1)->number;
-    const drivers::PairStep step = drivers::NextPairStep(a, b, drops, kMaxPairingDrops);
+    const drivers::PairStep step = drivers::NextPairStep(a, b, drops, drivers::kMaxPairingDrops);
     if (step == drivers::PairStep::kPaired) break;
     const int older = step == drivers::PairStep::kDropLeft    ? 0
                       : step == drivers::PairStep::kDropRight ? 1
@@ -54,7 +51,7 @@ Status LockstepCamera::Grab(device::StereoFrame* frame) {
     f.pending(older).reset();
     ++unpaired_[older];
     if (step == drivers::PairStep::kUnpairable) {
-      last_error_ = drivers::UnpairableMessage(a, b, kMaxPairingDrops);
+      last_error_ = drivers::UnpairableMessage(a, b, drivers::kMaxPairingDrops);
       return Status::kBadReply;
     }
   }

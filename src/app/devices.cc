@@ -120,35 +120,44 @@ drivers::DevicesConfig LockstepDevices(const drivers::DevicesConfig& given) {
   return c;
 }
 
+namespace {
+
+// The twin of a lockstep run on its own SimClock (robot->clock), its frames for the lockstep
+// camera (robot->frames), the wires' faults and the --at schedule as events of that clock.
+// Returns the scenario whose devices the run opens: every device on its real driver.
+sim::Scenario StartLockstepTwin(const sim::Scenario& given, const TwinWireOptions& wires,
+                                Robot* robot) {
+  const std::vector<ScheduledControl> schedule = CheckTwinWires(wires);
+  sim::Scenario scenario = given;
+  scenario.devices = LockstepDevices(given.devices);
+  robot->clock = std::make_unique<SimClock>();
+  robot->frames = std::make_shared<sim::LockstepFrames>();
+  sim::TwinOptions options = TwinOptionsFor(wires, given);
+  options.lockstep = robot->clock.get();
+  // The twin's world is the scenario's, its devices all simulated (they are the twin's).
+  sim::Scenario world = given;
+  world.devices = {};
+  robot->lockstep = std::make_unique<sim::Twin>(std::move(world), options,
+                                                sim::LockstepFrames::SinkFor(robot->frames));
+  sim::Twin* twin = robot->lockstep.get();
+  const double t_start = twin->time();
+  for (const ScheduledControl& c : schedule) {
+    robot->clock->At(Clock::TimePoint(Clock::FromSeconds(t_start + c.t_s)), [twin, c, t_start] {
+      const std::string err = twin->Control(c.command);
+      spdlog::info("twin: t = {:.3f} s: {}{}{}", twin->time() - t_start, c.command,
+                   err.empty() ? "" : ": ", err);
+    });
+  }
+  return scenario;
+}
+
+}  // namespace
+
 Robot OpenRobot(const sim::Scenario& given, const StopRequest* stop,
                 const TwinWireOptions* lockstep) {
   Robot robot;
   sim::Scenario lockstep_scenario;
-  if (lockstep != nullptr) {
-    const std::vector<ScheduledControl> schedule = CheckTwinWires(*lockstep);
-    lockstep_scenario = given;
-    lockstep_scenario.devices = LockstepDevices(given.devices);
-    robot.clock = std::make_unique<SimClock>();
-    robot.frames = std::make_shared<sim::LockstepFrames>();
-    sim::TwinOptions options;
-    options.lockstep = robot.clock.get();
-    options.seed = given.seed + 1;  // as `hgrasp twin` seeds it
-    options.faults = FaultPlanFor(*lockstep, given);
-    // The twin's world is the scenario's, its devices all simulated (they are the twin's).
-    sim::Scenario world = given;
-    world.devices = {};
-    robot.lockstep = std::make_unique<sim::Twin>(std::move(world), options,
-                                                 sim::LockstepFrames::SinkFor(robot.frames));
-    sim::Twin* twin = robot.lockstep.get();
-    const double t_start = twin->time();
-    for (const ScheduledControl& c : schedule) {
-      robot.clock->At(Clock::TimePoint(Clock::FromSeconds(t_start + c.t_s)), [twin, c, t_start] {
-        const std::string err = twin->Control(c.command);
-        spdlog::info("twin: t = {:.3f} s: {}{}{}", twin->time() - t_start, c.command,
-                     err.empty() ? "" : ": ", err);
-      });
-    }
-  }
+  if (lockstep != nullptr) lockstep_scenario = StartLockstepTwin(given, *lockstep, &robot);
   const sim::Scenario& scenario = lockstep != nullptr ? lockstep_scenario : given;
   robot.all_simulated = scenario.devices.AllSimulated();
   if (scenario.devices.AnySimulated()) robot.twin = std::make_unique<sim::SimRobot>(scenario);

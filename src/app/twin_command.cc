@@ -70,11 +70,9 @@ int Twin(const TwinCommandOptions& o) {
                      "TCP ports the camera streams can listen on (" + error + ")");
   }
 
-  sim::TwinOptions options;
+  sim::TwinOptions options = TwinOptionsFor(o.wires, scenario);
   options.dir = fs::absolute(o.dir).lexically_normal().string();
   options.rate = o.rate;
-  options.seed = scenario.seed + 1;
-  options.faults = FaultPlanFor(o.wires, scenario);
   drivers::GstStereoServer* server = cameras.get();
   sim::FrameSink sink = [server](int camera, const cv::Mat& bgr, std::uint64_t frame,
                                  double exposure_s) {

@@ -47,4 +47,11 @@ std::optional<drivers::FaultPlan> FaultPlanFor(const TwinWireOptions& o,
   return plan;
 }
 
+sim::TwinOptions TwinOptionsFor(const TwinWireOptions& o, const sim::Scenario& scenario) {
+  sim::TwinOptions options;
+  options.seed = scenario.seed + 1;
+  options.faults = FaultPlanFor(o, scenario);
+  return options;
+}
+
 }  // namespace hgrasp::app

@@ -11,6 +11,7 @@
 
 #include "serial/faulty_link.h"
 #include "sim/scenario.h"
+#include "sim/twin/twin.h"
 
 namespace hgrasp::app {
 
@@ -42,5 +43,11 @@ std::vector<ScheduledControl> CheckTwinWires(const TwinWireOptions& o);
 /// The fault plan of every line (each line varies its seed from it), or none without faults.
 std::optional<drivers::FaultPlan> FaultPlanFor(const TwinWireOptions& o,
                                                const sim::Scenario& scenario);
+
+/// The twin's seed and its lines' faults for a scenario, the same for `hgrasp twin` and
+/// `run --lockstep` (so that one scenario and fault seed make the same twin either way): the
+/// twin draws its own errors from the scenario's seed + 1 (the pipeline's simulated devices
+/// draw from the seed itself).
+sim::TwinOptions TwinOptionsFor(const TwinWireOptions& o, const sim::Scenario& scenario);
 
 }  // namespace hgrasp::app
