@@ -1,33 +1,34 @@
+// FaultyLink and LineFaults: corruption, garbage, cuts and dropouts as a FaultPlan asks, the
+// same damage from the same seed. Dropouts are timed on the clock the faults are given: a
+// SimClock here, so that every figure is exact and none depends on the machine's load.
+
 #include "serial/faulty_link.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <deque>
 #include <optional>
-#include <thread>
 #include <vector>
+
+#include "common/clock.h"
 
 namespace hgrasp::drivers {
 namespace {
 
 using device::Status;
 
-// A loopback: what is written comes back on Read.
+// A loopback: what is written comes back on Read (at once; nothing there is a timeout).
 class Loopback final : public ByteLink {
  public:
   Status Write(std::span<const std::uint8_t> bytes) override {
     q.insert(q.end(), bytes.begin(), bytes.end());
     return Status::kOk;
   }
-  Status Read(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) override {
+  Status Read(std::span<std::uint8_t> buf, double /*timeout_s*/, std::size_t* n) override {
     *n = 0;
-    if (q.empty()) {
-      std::this_thread::sleep_for(std::chrono::duration<double>(std::min(timeout_s, 0.01)));
-      return Status::kTimeout;
-    }
+    if (q.empty()) return Status::kTimeout;
     while (*n < buf.size() && !q.empty()) {
       buf[(*n)++] = q.front();
       q.pop_front();
@@ -114,17 +115,17 @@ TEST(FaultyLink, CutLosesEverythingBothWaysUntilMended) {
 TEST(FaultyLink, DropoutsLastTheirLengthAndRecur) {
   auto inner = std::make_unique<Loopback>();
   Loopback* loop = inner.get();
-  FaultyLink link(std::move(inner),
-                  FaultPlan{.dropouts_per_s = 10.0, .dropout_s = 0.05, .seed = 5});
+  SimClock clock;
+  FaultyLink link(std::move(inner), FaultPlan{.dropouts_per_s = 10.0, .dropout_s = 0.05, .seed = 5},
+                  clock);
   // Over 1 s, write a byte every ms: about 1 / (0.1 + 0.05) = 6.7 dropouts, each losing about
   // 50 bytes: a third of the traffic.
-  const auto t0 = std::chrono::steady_clock::now();
   std::size_t sent = 0;
-  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(1)) {
+  while (clock.NowSeconds() < 1.0) {
     const std::uint8_t b[] = {1};
     ASSERT_EQ(link.Write(b), Status::kOk);
     ++sent;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    clock.SleepFor(0.001);
   }
   const FaultCounts c = link.counts();
   EXPECT_GE(c.dropouts, 3u);
@@ -140,18 +141,19 @@ TEST(FaultyLink, DropoutsLastTheirLengthAndRecur) {
 TEST(FaultyLink, DropoutsKeepTheirLeastGap) {
   for (const double min_gap : {0.0, 0.03}) {
     SCOPED_TRACE(min_gap);
-    LineFaults faults(FaultPlan{
-        .dropouts_per_s = 50.0, .dropout_s = 0.03, .min_dropout_gap_s = min_gap, .seed = 9});
-    using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
+    SimClock clock;
+    LineFaults faults(
+        FaultPlan{
+            .dropouts_per_s = 50.0, .dropout_s = 0.03, .min_dropout_gap_s = min_gap, .seed = 9},
+        clock);
     // The passed bytes' times, and the longest wait between two samples.
     std::vector<std::pair<double, bool>> samples;
-    while (Clock::now() - t0 < std::chrono::seconds(1)) {
+    while (clock.NowSeconds() < 1.0) {
       const std::uint8_t b[] = {1};
       std::vector<std::uint8_t> out;
       faults.Pass(b, false, &out);
-      samples.emplace_back(std::chrono::duration<double>(Clock::now() - t0).count(), !out.empty());
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      samples.emplace_back(clock.NowSeconds(), !out.empty());
+      clock.SleepFor(0.001);
     }
     double step = 0.0;
     for (std::size_t k = 1; k < samples.size(); ++k) {
