@@ -1,12 +1,11 @@
-// The laser board driver against the emulator over a real pty: every seam method the pipeline
-// uses (StripeLaser::Read/SetLaser/MoveTo, Leds::Count/Set) and the core's operations
-// (status, velocity, frame latches for the camera driver), checking the emulator's model and
-// the driver's readings; thread safety; the sequence-number memory across drivers.
+// The laser board driver against the emulator on a simulated 115200-baud line (SimLine, in
+// simulated time: label unit): every seam method the pipeline uses (StripeLaser::Read/SetLaser/
+// MoveTo, Leds::Count/Set) and the core's operations (status, velocity, frame latches for the
+// camera driver), checking the emulator's model and the driver's readings; the sequence-number
+// memory across drivers. The real transport and the camera thread beside the task's (wall-clock
+// time) are laser_board_pty_test.cc's.
 
 #include <gtest/gtest.h>
-
-#include <chrono>
-#include <thread>
 
 #include "common/error.h"
 #include "laser_board_rig.h"
@@ -17,29 +16,28 @@ namespace {
 namespace lb = laser_board;
 using device::Side;
 using device::Status;
-using testing::BoardRig;
+using testing::SimBoardRig;
 
 class LaserBoardDriverTest : public ::testing::Test {
  protected:
   LaserBoardDriverTest()
-      : rig_(::testing::UnitTest::GetInstance()->current_test_info()->name()),
-        board_(std::make_shared<LaserBoard>(rig_.OpenPort())),
+      : board_(std::make_shared<LaserBoard>(rig_.Open(), LaserBoardOptions{}, rig_.clock)),
         laser_(board_),
         leds_(board_) {}
 
   // Reads until the motor stops (at most `timeout_s`).
   device::StripeLaserState WaitStopped(double timeout_s = 3.0) {
     device::StripeLaserState s;
-    const auto t0 = std::chrono::steady_clock::now();
+    const Clock::TimePoint t0 = rig_.clock.Now();
     do {
       EXPECT_EQ(laser_.Read(&s), Status::kOk);
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    } while (s.moving && testing::SecondsSince(t0) < timeout_s);
+      rig_.clock.SleepFor(0.01);
+    } while (s.moving && rig_.Since(t0) < timeout_s);
     EXPECT_FALSE(s.moving);
     return s;
   }
 
-  BoardRig rig_;
+  SimBoardRig rig_;
   std::shared_ptr<LaserBoard> board_;
   BoardStripeLaser laser_;
   BoardLeds leds_;
@@ -104,7 +102,7 @@ TEST_F(LaserBoardDriverTest, MotorVelocityRunsToTheLimit) {
   EXPECT_EQ(WaitStopped().encoder_count, 4500);
   EXPECT_EQ(board_->SetMotorVelocity(-9001), Status::kRejected);
   ASSERT_EQ(board_->SetMotorVelocity(-9000), Status::kOk);
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  rig_.clock.SleepFor(0.2);
   ASSERT_EQ(board_->SetMotorVelocity(0), Status::kOk);  // stop
   const auto s = WaitStopped();
   EXPECT_LT(s.encoder_count, 4500 - 1000);
@@ -129,25 +127,25 @@ TEST_F(LaserBoardDriverTest, LedsPerGripper) {
 TEST_F(LaserBoardDriverTest, LedCountIsAnOption) {
   LaserBoardOptions options;
   options.leds_per_gripper = 4;
-  auto board = std::make_shared<LaserBoard>(rig_.OpenPort(), options);
+  auto board = std::make_shared<LaserBoard>(rig_.Open(), options, rig_.clock);
   BoardLeds leds(board);
   EXPECT_EQ(leds.Count(Side::kLeft), 4);
   EXPECT_EQ(leds.Set(Side::kLeft, 0x10), Status::kRejected);
   options.leds_per_gripper = 33;
-  EXPECT_THROW(LaserBoard(rig_.OpenPort(), options), InputError);
+  EXPECT_THROW(LaserBoard(rig_.Open(), options, rig_.clock), InputError);
 }
 
 TEST_F(LaserBoardDriverTest, FrameLatchesFollowTheSweep) {
   FrameLatch none;
   // The first VSYNC comes at 40 ms of the emulator's clock; wait for a few.
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  rig_.clock.SleepFor(0.2);
   ASSERT_EQ(laser_.MoveTo(-2000, 9000), Status::kOk);
   WaitStopped();
   ASSERT_EQ(laser_.SetLaser(true), Status::kOk);
   ASSERT_EQ(laser_.MoveTo(2000, 2000), Status::kOk);  // 2 s sweep, 80 counts per frame
   std::vector<FrameLatch> seen;
   for (int i = 0; i < 12; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(40));
+    rig_.clock.SleepFor(0.04);
     FrameLatch l;
     ASSERT_EQ(board_->LatestFrameLatch(&l), Status::kOk);
     seen.push_back(l);
@@ -179,29 +177,6 @@ TEST_F(LaserBoardDriverTest, FrameLatchesFollowTheSweep) {
   EXPECT_EQ(board_->FrameLatchOf(f + 1000, &none), Status::kRejected);
 }
 
-TEST_F(LaserBoardDriverTest, ThreadSafeCore) {
-  // The pipeline's thread drives the seam; a camera thread asks for latches meanwhile.
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  std::atomic<int> failures{0};
-  std::thread camera([&] {
-    for (int i = 0; i < 200; ++i) {
-      FrameLatch l;
-      if (board_->LatestFrameLatch(&l) != Status::kOk) ++failures;
-    }
-  });
-  for (int i = 0; i < 100; ++i) {
-    device::StripeLaserState s;
-    if (laser_.Read(&s) != Status::kOk) ++failures;
-    if (leds_.Set(i % 2 ? Side::kLeft : Side::kRight, static_cast<std::uint32_t>(i % 64)) !=
-        Status::kOk) {
-      ++failures;
-    }
-  }
-  camera.join();
-  EXPECT_EQ(failures.load(), 0);
-  EXPECT_EQ(rig_.Executed().size(), 100u);
-}
-
 TEST_F(LaserBoardDriverTest, ANewDriverContinuesAfterTheBoardsLastSequenceNumber) {
   // The board remembers the last number; a driver that started again from 1 would see its first
   // command answered from that memory and not executed. The driver asks the board first.
@@ -209,7 +184,7 @@ TEST_F(LaserBoardDriverTest, ANewDriverContinuesAfterTheBoardsLastSequenceNumber
   const std::uint8_t last = rig_.With([](LaserBoardEmulator& e) { return e.last_seq(); });
   EXPECT_NE(last, lb::kUnsequenced);
   board_.reset();  // (the adapters still hold it; the new driver gets its own port)
-  auto again = std::make_shared<LaserBoard>(rig_.OpenPort());
+  auto again = std::make_shared<LaserBoard>(rig_.Open(), LaserBoardOptions{}, rig_.clock);
   ASSERT_EQ(again->SetLaser(false), Status::kOk);
   EXPECT_FALSE(rig_.With([](LaserBoardEmulator& e) { return e.hardware().LaserOn(); }));
   EXPECT_NE(rig_.With([](LaserBoardEmulator& e) { return e.last_seq(); }), last);

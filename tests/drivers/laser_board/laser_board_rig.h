@@ -103,8 +103,4 @@ class SimBoardRig {
   SimLine line_;
 };
 
-inline double SecondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace hgrasp::drivers::testing
