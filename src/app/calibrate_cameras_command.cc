@@ -104,7 +104,7 @@ int CalibrateCameras(const CalibrateCamerasOptions& o) {
       robot::HeadKinematics::FromUrdfFile(ResolveDataPath("models/humanoid.urdf"));
 
   const StopSignals signals;
-  Robot robot = OpenRobot(scenario, signals.request());
+  Robot robot = OpenRobot(scenario, signals.request(), CleanLockstepWires(o.lockstep));
   if (EndedAtStart(robot, scenario, nullptr, "calibrate cameras")) return 1;
   scan::CameraCalibrationConfig config;
   config.board = {o.board_cols, o.board_rows, 1e-3 * o.square_mm};

@@ -34,6 +34,9 @@ struct CalibrateLaserOptions {
   std::string scenario;  ///< a scene with a non-planar target
   std::string out_file;  ///< the laser calibration YAML to write
   CalibrationFiles files;
+  /// Every device on its real driver against the twin in simulated time, in this process
+  /// (app/devices.h: OpenRobot's lockstep, with clean wires).
+  bool lockstep = false;
 };
 
 /// `hgrasp calibrate laser`: the laser's self-calibration (paper eq. 6) over a sweep.
@@ -51,6 +54,9 @@ struct CalibrateCamerasOptions {
   int board_cols = 8, board_rows = 6;  ///< inner corners
   double square_mm = 25.0;
   std::string cameras = "calibration/sim/cameras.yaml";  ///< nominal: only for the report
+  /// Every device on its real driver against the twin in simulated time, in this process
+  /// (app/devices.h: OpenRobot's lockstep, with clean wires).
+  bool lockstep = false;
 };
 
 /// `hgrasp calibrate cameras`: stereo calibration from chessboards the head looks at.
@@ -62,6 +68,9 @@ struct ScanOptions {
   CalibrationFiles files;
   bool single_camera = false;  ///< light-plane triangulation from the left camera only
   bool lean = false;           ///< only report.json (a sweep's scene): no range.ply, range.png
+  /// Every device on its real driver against the twin in simulated time, in this process
+  /// (app/devices.h: OpenRobot's lockstep, with clean wires).
+  bool lockstep = false;
 };
 
 /// `hgrasp scan`: one laser sweep: range.ply, range.png and report.json.
@@ -74,6 +83,9 @@ struct ModelOptions {
   /// Only report.json and the pictures a sweep's page shows (segments.png, models.png or
   /// grasp.png); no range.ply, range.png or models.obj.
   bool lean = false;
+  /// Every device on its real driver against the twin in simulated time, in this process
+  /// (app/devices.h: OpenRobot's lockstep, with clean wires).
+  bool lockstep = false;
 };
 
 /// `hgrasp model`: a scan, its planar segmentation and the boxes fitted to it: range.ply,

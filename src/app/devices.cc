@@ -153,6 +153,11 @@ sim::Scenario StartLockstepTwin(const sim::Scenario& given, const TwinWireOption
 
 }  // namespace
 
+const TwinWireOptions* CleanLockstepWires(bool lockstep) {
+  static const TwinWireOptions kClean;
+  return lockstep ? &kClean : nullptr;
+}
+
 Robot OpenRobot(const sim::Scenario& given, const StopRequest* stop,
                 const TwinWireOptions* lockstep) {
   Robot robot;

@@ -92,6 +92,11 @@ bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
 Robot OpenRobot(const sim::Scenario& scenario, const StopRequest* stop = nullptr,
                 const TwinWireOptions* lockstep = nullptr);
 
+/// OpenRobot's `lockstep` for a command that runs in lockstep on clean wires (no faults, no
+/// control commands: `scan`, `model`, `plan`, `calibrate` with --lockstep); nullptr when
+/// `lockstep` is false.
+const TwinWireOptions* CleanLockstepWires(bool lockstep);
+
 /// The devices block of a lockstep run: every device on its real driver, with the options the
 /// scenario's block gives that driver, else the defaults (cameras: none here, the twin's).
 drivers::DevicesConfig LockstepDevices(const drivers::DevicesConfig& given);

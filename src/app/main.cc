@@ -159,6 +159,13 @@ int main(int argc, char** argv) {
       ->type_name("COUNT");
 
   hgrasp::app::CalibrateLaserOptions calibrate;
+  // --lockstep for the commands that take no wire faults (run's has its own, with them).
+  const auto add_lockstep = [](CLI::App* cmd, bool* lockstep) {
+    cmd->add_flag("--lockstep", *lockstep,
+                  "every device on its real driver against the twin, in simulated time, in "
+                  "this process (no pty)");
+  };
+
   CLI::App* cmd_calibrate = app.add_subcommand("calibrate", "Self-calibration");
   cmd_calibrate->require_subcommand(1);
   CLI::App* cmd_calibrate_laser = cmd_calibrate->add_subcommand(
@@ -169,6 +176,7 @@ int main(int argc, char** argv) {
   cmd_calibrate_laser->add_option("--out", calibrate.out_file, "laser calibration YAML to write")
       ->required();
   cmd_calibrate_laser->add_option("--cameras", calibrate.files.cameras, "camera intrinsics YAML");
+  add_lockstep(cmd_calibrate_laser, &calibrate.lockstep);
 
   hgrasp::app::CalibrateCamerasOptions calibrate_cameras;
   CLI::App* cmd_calibrate_cameras = cmd_calibrate->add_subcommand(
@@ -197,6 +205,7 @@ int main(int argc, char** argv) {
                                     "the board's square edge (mm, default 25)");
   cmd_calibrate_cameras->add_option("--cameras", calibrate_cameras.cameras,
                                     "the nominal camera intrinsics, for the report");
+  add_lockstep(cmd_calibrate_cameras, &calibrate_cameras.lockstep);
 
   // The commands that scan a scenario share its arguments: scenario, --out, calibration files.
   auto scene_command = [&](const char* name, const char* what, std::string* scenario,
@@ -218,6 +227,7 @@ int main(int argc, char** argv) {
                      "light-plane triangulation from the left camera alone, no stereo validation "
                      "(for comparison)");
   cmd_scan->add_flag("--lean", scan.lean, "only report.json (as a sweep's scenes)");
+  add_lockstep(cmd_scan, &scan.lockstep);
 
   hgrasp::app::ModelOptions model;
   CLI::App* cmd_model = scene_command(
@@ -228,6 +238,7 @@ int main(int argc, char** argv) {
 
   cmd_model->add_flag("--lean", model.lean,
                       "only report.json, segments.png and models.png (as a sweep's scenes)");
+  add_lockstep(cmd_model, &model.lockstep);
 
   hgrasp::app::ModelOptions plan;
   CLI::App* cmd_plan = scene_command(
@@ -236,6 +247,7 @@ int main(int argc, char** argv) {
 
   cmd_plan->add_flag("--lean", plan.lean,
                      "only report.json, segments.png and grasp.png (as a sweep's scenes)");
+  add_lockstep(cmd_plan, &plan.lockstep);
 
   hgrasp::app::RunOptions run;
   CLI::App* cmd_run = scene_command(

@@ -311,7 +311,7 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   OutputDir out(o.out_dir);
   const StopSignals signals;
   config.stop = signals.request();
-  Robot robot = OpenRobot(scenario, signals.request());
+  Robot robot = OpenRobot(scenario, signals.request(), CleanLockstepWires(o.lockstep));
   if (EndedAtStart(robot, scenario, &out, plan ? "plan" : "model")) return 1;
   device::RobotDevices& dev = robot.devices;
   sim::ScanTruth scan_truth;

@@ -47,7 +47,7 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   CheckOutputFile(o.out_file, "--out", out_expected);
   const auto head = Head();
   const StopSignals signals;
-  Robot robot = OpenRobot(scenario, signals.request());
+  Robot robot = OpenRobot(scenario, signals.request(), CleanLockstepWires(o.lockstep));
   if (EndedAtStart(robot, scenario, nullptr, "calibrate laser")) return 1;
   device::RobotDevices& dev = robot.devices;
   scan::LaserCalibrationReport report;
@@ -108,7 +108,7 @@ int Scan(const ScanOptions& o) {
   const auto laser = robot::LoadLaserCalibration(ResolveDataPath(o.files.laser));
   OutputDir out(o.out_dir);
   const StopSignals signals;
-  Robot robot = OpenRobot(scenario, signals.request());
+  Robot robot = OpenRobot(scenario, signals.request(), CleanLockstepWires(o.lockstep));
   if (EndedAtStart(robot, scenario, &out, "scan")) return 1;
   device::RobotDevices& dev = robot.devices;
   scan::StripeFrameConfig config;
