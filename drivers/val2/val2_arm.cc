@@ -311,8 +311,9 @@ Status Val2Arm::SetSpeed(double fraction) {
 
 Status Val2Arm::Stop() { return Command(val2::Encode(val2::AbortCommand()), true, true); }
 
-Status Val2Arm::SafeStop() {
-  if (silent_since_) {
+void Val2Arm::StopAtOnce() {
+  if (silent_since_ && !blind_in_this_stop_) {
+    blind_in_this_stop_ = true;
     // ^U empties the console's line of whatever a lost exchange left on it.
     // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "\x15" + std::string.
     std::string blind(1, '\x15');
@@ -326,6 +327,11 @@ Status Val2Arm::SafeStop() {
     }
     known_ = false;  // what the line holds now is unknown: the next exchange finds out
   }
+}
+
+Status Val2Arm::SafeStop() {
+  StopAtOnce();
+  blind_in_this_stop_ = false;
   return Stop();
 }
 

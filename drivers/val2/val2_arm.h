@@ -136,6 +136,9 @@ class Val2Arm final : public device::Arm {
   /// host (a broken receive wire, a dropout on the way back) stops the arm at once. Then Stop()
   /// as always, which confirms the stop or reports why it could not.
   device::Status SafeStop() override;
+  /// To a controller silent since a failed call: ^U ABORT CR typed blind (no answer awaited),
+  /// once per safe stop (SafeStop types it itself when this was not called first).
+  void StopAtOnce() override;
   /// DO READY: the arm's READY position (VAL's rest position, joints 0, -90, 90, 0, 0, 0 deg).
   device::Status Ready();
 
@@ -276,6 +279,7 @@ class Val2Arm final : public device::Arm {
   Val2Counters counters_;
   CommandLog<std::string> command_log_;
   bool blind_typed_ = false;  // SafeStop typed ^U ABORT blind since the last call that succeeded
+  bool blind_in_this_stop_ = false;  // StopAtOnce typed it for the SafeStop to come
 };
 
 }  // namespace hgrasp::drivers

@@ -46,7 +46,12 @@ SafeStopReport LeaveSafe(device::RobotDevices& dev) {
   const auto add = [&](std::string device, std::string action, Status status) {
     r.actions.push_back({std::move(device), std::move(action), status});
   };
-  // The arms first: they carry the most energy.
+  // The arms first: they carry the most energy. What needs no answer goes out to both before
+  // either waits on its line: at 9600 baud the left arm's confirmed ABORT took 56 ms, and the
+  // right arm, whose controller had gone silent, got its blind ABORT 0.506 s after the cut.
+  for (auto& arm : dev.arm) {
+    if (arm) arm->StopAtOnce();
+  }
   for (Side side : {Side::kLeft, Side::kRight}) {
     const std::string key = "arm_" + std::string(device::ToString(side));
     if (device::Arm* arm = dev.arm[static_cast<int>(side)].get()) {

@@ -41,6 +41,11 @@ class Arm {
   /// The safe stop (DESIGN.md rule 8): Stop, and more where the driver can do more for a
   /// controller it cannot hear (Val2Arm types the stop blind first). Never moves the arm.
   virtual Status SafeStop() { return Stop(); }
+  /// The part of SafeStop that needs no answer, at once: a driver that cannot hear its
+  /// controller types the stop blind (Val2Arm); nothing otherwise. The robot's safe stop calls
+  /// it for every arm before any arm's SafeStop waits on its line, so that one arm's confirmed
+  /// stop does not hold up the blind stop of an arm that has gone silent. Never moves the arm.
+  virtual void StopAtOnce() {}
 };
 
 }  // namespace hgrasp::device

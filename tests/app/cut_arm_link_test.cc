@@ -4,20 +4,22 @@
 // SafeStop types the ABORT blind to a silent controller. With both wires cut nothing can reach
 // the controller; then the safe stop reports the arm's stop as failed (second case), and the
 // next call after the cable is mended ABORTs first (Val2Arm's lost-link recovery).
+// The arms' lines are simulated (SimLine at 9600 baud, one SimClock for both drivers and their
+// emulators), so the cut falls at the same moment of the move every run and the half second is
+// measured in simulated time, whatever the machine's load. The rest of the robot is the
+// simulator's own devices.
 
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <chrono>
+#include <functional>
 #include <memory>
-#include <thread>
 
 #include "app/safe_stop.h"
+#include "common/clock.h"
 #include "common/paths.h"
-#include "emulators/emulator.h"
+#include "emulators/sim_line.h"
 #include "emulators/val2_emulator.h"
 #include "serial/faulty_link.h"
-#include "serial/serial_port.h"
 #include "sim/sim_devices.h"
 #include "task/grasp_task.h"
 #include "val2/val2_arm.h"
@@ -29,16 +31,11 @@ using device::Side;
 using device::Status;
 
 struct ArmOnAWire {
-  explicit ArmOnAWire(Side side) : host(drivers::MakeVal2Emulator(side)) {
-    drivers::SerialConfig config;
-    config.port = host.port();
-    config.baud = 9600;
-    std::string error;
-    auto port = drivers::SerialPort::Open(config, &error);
-    EXPECT_NE(port, nullptr) << error;
-    auto faulty = std::make_unique<drivers::FaultyLink>(std::move(port), drivers::FaultPlan{});
+  ArmOnAWire(Side side, SimClock& clock) : host(clock, drivers::MakeVal2Emulator(side), 9600) {
+    auto faulty = std::make_unique<drivers::FaultyLink>(host.Open(), drivers::FaultPlan{}, clock);
     wire = faulty.get();
-    auto val2 = std::make_unique<drivers::Val2Arm>(std::move(faulty));
+    auto val2 =
+        std::make_unique<drivers::Val2Arm>(std::move(faulty), drivers::Val2Options{}, clock);
     driver = val2.get();
     arm = std::move(val2);
   }
@@ -66,7 +63,7 @@ struct ArmOnAWire {
     return host.With([&](drivers::DeviceEmulator& d) { return Emulator(d).model().moving(); });
   }
 
-  drivers::EmulatorHost host;
+  drivers::SimLine host;
   drivers::FaultyLink* wire = nullptr;
   drivers::Val2Arm* driver = nullptr;
   std::unique_ptr<device::Arm> arm;
@@ -75,8 +72,8 @@ struct ArmOnAWire {
 struct Outcome {
   task::TaskResult result;
   app::SafeStopReport safe;
-  double t_cut = 0.0;    // emulator time of the cut
-  double t_abort = -1;   // emulator time of the ABORT after it
+  double t_cut = 0.0;   // emulator time of the cut
+  double t_abort = -1;  // emulator time of the ABORT after it
   bool still_moving = true;
   std::string side;
 };
@@ -87,16 +84,17 @@ Outcome CutDuringTheApproach(bool both_ways) {
   const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
   sim::SimRobot robot(scenario);
   device::RobotDevices dev = robot.TakeDevices();
-  ArmOnAWire left(Side::kLeft), right(Side::kRight);
+  SimClock clock;
+  ArmOnAWire left(Side::kLeft, clock), right(Side::kRight, clock);
   dev.arm[0] = std::move(left.arm);
   dev.arm[1] = std::move(right.arm);
   task::TaskConfig config;
   config.target_color = "yellow";
-  task::GraspTask task(&dev,
-                       task::LoadRobotModel("calibration/sim/cameras.yaml",
-                                            "calibration/sim/laser.yaml",
-                                            "calibration/sim/leds.yaml"),
-                       config);
+  task::GraspTask task(
+      &dev,
+      task::LoadRobotModel("calibration/sim/cameras.yaml", "calibration/sim/laser.yaml",
+                           "calibration/sim/leds.yaml"),
+      config);
   Outcome out;
   if (!task.Look() || !task.Plan()) {
     ADD_FAILURE() << task.result().message;
@@ -104,22 +102,25 @@ Outcome CutDuringTheApproach(bool both_ways) {
   }
   ArmOnAWire& planned = task.result().plan->side == Side::kLeft ? left : right;
   out.side = std::string(device::ToString(task.result().plan->side));
-  std::atomic<bool> done{false};
-  std::thread cutter([&] {
-    while (!done && !planned.Moved()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    if (done) return;
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // well into the move
-    out.t_cut = planned.host.Now();
-    if (both_ways) {
-      planned.wire->Cut(true);
-    } else {
-      planned.wire->CutFromDevice(true);
+  // Every 5 ms of the arms' time: once the planned arm has begun to move, the cut 200 ms later
+  // (well into the move).
+  std::function<void()> watch = [&] {
+    if (!planned.Moved()) {
+      clock.At(clock.Now() + Clock::FromSeconds(0.005), watch);
+      return;
     }
-  });
+    clock.At(clock.Now() + Clock::FromSeconds(0.2), [&] {
+      out.t_cut = planned.host.Now();
+      if (both_ways) {
+        planned.wire->Cut(true);
+      } else {
+        planned.wire->CutFromDevice(true);
+      }
+    });
+  };
+  clock.At(clock.Now(), watch);
   EXPECT_FALSE(task.Approach());
   out.safe = app::LeaveSafe(dev);  // as the composition root does at once
-  done = true;
-  cutter.join();
   out.result = task.result();
   out.t_abort = planned.AbortAfter(out.t_cut);
   out.still_moving = planned.Moving();
