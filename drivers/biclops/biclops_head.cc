@@ -138,6 +138,7 @@ BiclopsHead::BiclopsHead(std::unique_ptr<ByteLink> link, const BiclopsOptions& o
   Require(options_.stop_settle_s > 0.0, "stop_settle_s", options_.stop_settle_s,
           "a positive time (s)");
   created_ = call_start_ = last_rx_ = clock_->Now();
+  silence_limit_s_ = options_.silence_timeout_s;
 }
 
 BiclopsCounters BiclopsHead::counters() const {
@@ -161,27 +162,52 @@ std::array<std::int32_t, 3> BiclopsHead::ToCounts(const device::HeadJoints& targ
 void BiclopsHead::BeginCall() {
   call_start_ = clock_->Now();
   silent_ = false;
+  probing_ = false;
+  silence_limit_s_ = options_.silence_timeout_s;
 }
 
 double BiclopsHead::SilenceLeft() const {
   const Clock::TimePoint since = std::max(call_start_, last_rx_);
-  return options_.silence_timeout_s - Seconds(clock_->Now() - since);
+  // In whole clock ticks: a remainder below one tick would be a wait that never ends.
+  return Seconds(Clock::FromSeconds(silence_limit_s_) - (clock_->Now() - since));
+}
+
+void BiclopsHead::SilenceReached() {
+  if (probing_ || line_probes_left_ <= 0) {
+    silent_ = true;  // the probe went unanswered too, or none is granted: the line is lost
+    return;
+  }
+  // During homing, a silence as long as the limit is a dropout that has ended or a cut cable:
+  // one resynchronisation round (a drain and up to a packet's length of zeros, each awaited)
+  // tells which. The exchange in flight ends as a lost reply (Exchange watches line_probes_),
+  // which every step already resolves without executing anything twice.
+  --line_probes_left_;
+  ++line_probes_;
+  ++counters_.line_probes;
+  probing_ = true;
+  need_sync_ = true;
+  call_start_ = clock_->Now();
+  silence_limit_s_ = static_cast<double>(pmd::kMaxCommandBytes + 2) * ZeroWait();
 }
 
 Status BiclopsHead::ReadLink(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n) {
   *n = 0;
   const double left = SilenceLeft();
   if (left <= 0.0) {
-    silent_ = true;
+    SilenceReached();
     return Status::kTimeout;
   }
   const Status s = link_->Read(buf, std::clamp(timeout_s, 0.0, left), n);
   if (s == Status::kOk && *n > 0) {
     last_rx_ = clock_->Now();
+    if (probing_) {  // the chip answered the probe: the full limit again from this byte
+      probing_ = false;
+      silence_limit_s_ = options_.silence_timeout_s;
+    }
     return Status::kOk;
   }
   if (s == Status::kDisconnected) return s;
-  if (SilenceLeft() <= 0.0) silent_ = true;
+  if (SilenceLeft() <= 0.0) SilenceReached();
   return Status::kTimeout;
 }
 
@@ -206,12 +232,13 @@ Status BiclopsHead::Exchange(const pmd::Command& command, int result_words, pmd:
   if (s != Status::kOk) return s;
   decoder_.Expect(result_words);
   const Clock::TimePoint sent = clock_->Now();
-  const Clock::TimePoint deadline =
-      clock_->Now() + Clock::FromSeconds(options_.reply_timeout_s);
+  const Clock::TimePoint deadline = clock_->Now() + Clock::FromSeconds(options_.reply_timeout_s);
+  const std::uint64_t probes = line_probes_;
   std::uint8_t buf[16];
   for (;;) {
     const double left = Seconds(deadline - clock_->Now());
-    if (left <= 0.0 || silent_) {
+    // A line probe begun meanwhile (SilenceReached) needs its time for the resynchronisation.
+    if (left <= 0.0 || silent_ || line_probes_ != probes) {
       ++counters_.timeouts;
       return Status::kTimeout;
     }
@@ -312,8 +339,7 @@ double BiclopsHead::ZeroWait() const {
   // packet's round trip, which is longer than a zero's: a late answer to an earlier zero, timed
   // as this one's, must not make the wait too short (a zero sent before the answer came stays
   // pending and misframes the check).
-  const double per_zero =
-      zero_rtt_s_ > 0.0 ? std::max(3.0 * zero_rtt_s_, rtt_s_) : 4.0 * rtt_s_;
+  const double per_zero = zero_rtt_s_ > 0.0 ? std::max(3.0 * zero_rtt_s_, rtt_s_) : 4.0 * rtt_s_;
   return std::clamp(per_zero, 0.003, options_.resync_byte_timeout_s);
 }
 
@@ -437,7 +463,7 @@ Status BiclopsHead::WriteRegister(int axis, Register r, std::int64_t value) {
       Record(command, false);
       return Status::kBadReply;  // changed by something else
     }
-    ++counters_.resends;                          // not executed: safe to send again
+    ++counters_.resends;  // not executed: safe to send again
   }
   return Status::kBadReply;
 }
@@ -1052,8 +1078,7 @@ Status BiclopsHead::Stop() {
   // Stopped means at rest: the stop is executed at once, but the servo brakes each axis from
   // its speed (a homing sweep, a move). The safe stop's report must not say "ok" for a head
   // still turning.
-  const Clock::TimePoint give_up =
-      clock_->Now() + Clock::FromSeconds(options_.stop_settle_s);
+  const Clock::TimePoint give_up = clock_->Now() + Clock::FromSeconds(options_.stop_settle_s);
   for (int a = 0; a < 3; ++a) {
     for (;;) {
       pmd::Reply reply;
@@ -1080,6 +1105,14 @@ Status BiclopsHead::ConfigureAndHome(const StopRequest* stop) {
     ~Forget() { *stop = nullptr; }
   } forget_stop{&stop_};
   BeginCall();
+  // A silence that reaches the limit during homing gets a line probe (SilenceReached) instead
+  // of ending the homing at once: a 200 ms dropout on top of a packet the line damaged can
+  // silence the chip for 0.4 s (PROTOCOL.md, "Homing through a noisy line").
+  line_probes_left_ = options_.max_resends;
+  struct NoProbes {
+    int* left;
+    ~NoProbes() { *left = 0; }
+  } no_probes{&line_probes_left_};
   last_error_.clear();
   homed_ = false;
   Status s = EnsureInitialized();

@@ -91,7 +91,9 @@ struct BiclopsOptions {
   /// driver waits four measured round trips, at least 3 ms, at most this).
   double resync_byte_timeout_s = 0.02;
   /// A call gives up with kTimeout once nothing at all has come from the chip for this long
-  /// (a cut cable is reported within this time plus one wait).
+  /// (a cut cable is reported within this time plus one wait). ConfigureAndHome gives up only
+  /// once the chip has not answered one resynchronisation round after that either (the line
+  /// probe: up to max_resends per homing), so a cut cable ends homing about 0.1 s later.
   double silence_timeout_s = 0.4;
   /// Re-sends of one command known not to have been executed (TRACLabs libPMD tries 4 times;
   /// the read-back lets us try more safely).
@@ -125,6 +127,8 @@ struct BiclopsCounters {
   std::uint64_t update_checks = 0;  ///< profile ends awaited after an unclear Update reply
   std::uint64_t resends = 0;        ///< commands re-sent, known not to have been executed
   std::uint64_t disconnects = 0;    ///< calls that met a vanished port
+  /// Silences that reached silence_timeout_s during homing and were given a line probe.
+  std::uint64_t line_probes = 0;
 };
 
 class BiclopsHead final : public device::Head {
@@ -163,6 +167,9 @@ class BiclopsHead final : public device::Head {
   /// axis and step failed. Not called by the constructor; may be called again (re-homes).
   /// `stop` (may be null) is polled while the axes sweep: when requested, homing ends with
   /// kInterrupted (the axis is left moving; the caller stops the head).
+  /// A silence of silence_timeout_s does not end homing by itself: the chip gets one
+  /// resynchronisation round to answer (a line probe), and when it does (the silence was a
+  /// dropout) the step goes on, its lost reply resolved as any other (nothing executed twice).
   device::Status ConfigureAndHome(const StopRequest* stop = nullptr);
   /// Whether ConfigureAndHome has completed since the driver was made (or the chip reset).
   bool homed() const;
@@ -209,6 +216,8 @@ class BiclopsHead final : public device::Head {
   static std::size_t Index(int axis) { return static_cast<std::size_t>(axis); }
   void BeginCall();
   double SilenceLeft() const;
+  /// At the silence limit: a line probe when one is granted (homing), else silent_.
+  void SilenceReached();
   /// One read from the link, keeping track of silence. kTimeout when nothing came.
   device::Status ReadLink(std::span<std::uint8_t> buf, double timeout_s, std::size_t* n);
   /// Reads until the line is quiet for `quiet_s`, then drops everything received.
@@ -265,6 +274,10 @@ class BiclopsHead final : public device::Head {
   pmd::ReplyDecoder decoder_;
   Clock::TimePoint created_, call_start_, last_rx_;
   bool silent_ = false;
+  double silence_limit_s_ = 0.4;   ///< silence_timeout_s, or the line probe's length
+  bool probing_ = false;           ///< in a line probe: nothing heard since it began
+  int line_probes_left_ = 0;       ///< line probes granted (during ConfigureAndHome)
+  std::uint64_t line_probes_ = 0;  ///< line probes begun
   bool need_sync_ = true;
   bool initialized_ = false;
   std::array<std::array<Known, kRegisters>, 3> reg_{};  ///< buffered registers per axis
@@ -279,7 +292,7 @@ class BiclopsHead final : public device::Head {
   std::array<std::int32_t, 3> velocity_reg_{};
   std::array<std::uint32_t, 3> accel_reg_{};
   double longest_move_s_ = 0.0;
-  double rtt_s_ = 0.0;  ///< mean time from a packet to its complete reply
+  double rtt_s_ = 0.0;       ///< mean time from a packet to its complete reply
   double zero_rtt_s_ = 0.0;  ///< mean time from a resync zero to the first byte of its answer
   BiclopsCounters counters_;
   bool homed_ = false;

@@ -4,14 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <thread>
 
 namespace hgrasp::drivers {
 
 namespace {
 
 namespace op = pmd::op;
-using Clock = std::chrono::steady_clock;
 
 // libPMD PMDAxisControl: AutostopEventMask and MoveEventMask.
 constexpr std::uint16_t kAutostopEvents =
@@ -25,7 +23,8 @@ std::string Hex(int v) {
 
 }  // namespace
 
-VendorHost::VendorHost(std::unique_ptr<ByteLink> link) : link_(std::move(link)) {}
+VendorHost::VendorHost(std::unique_ptr<ByteLink> link, Clock& clock)
+    : link_(std::move(link)), clock_(&clock) {}
 
 bool VendorHost::Send(const pmd::Command& c, int result_words, pmd::Reply* reply) {
   ++packets_;
@@ -37,11 +36,11 @@ bool VendorHost::Send(const pmd::Command& c, int result_words, pmd::Reply* reply
   if (c.opcode == op::kReset) return true;  // libPMD reads no reply to Reset
   pmd::ReplyDecoder decoder;
   decoder.Expect(result_words);
-  const auto deadline = Clock::now() + std::chrono::milliseconds(500);
+  const auto deadline = clock_->Now() + std::chrono::milliseconds(500);
   std::uint8_t buf[16];
   for (;;) {
     std::size_t n = 0;
-    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    const double left = Clock::ToSeconds(deadline - clock_->Now());
     if (left <= 0.0) {
       error_ = "no reply to opcode " + Hex(c.opcode);
       return false;
@@ -94,9 +93,9 @@ bool VendorHost::SendRaw(std::span<const std::uint8_t> bytes, int reply_words,
   if (link_->Write(bytes) != device::Status::kOk) return false;
   pmd::ReplyDecoder decoder;
   decoder.Expect(reply_words);
-  const auto deadline = Clock::now() + std::chrono::milliseconds(500);
+  const auto deadline = clock_->Now() + std::chrono::milliseconds(500);
   std::uint8_t b = 0;
-  while (Clock::now() < deadline) {
+  while (clock_->Now() < deadline) {
     std::size_t n = 0;
     link_->Read(std::span<std::uint8_t>(&b, 1), 0.05, &n);
     if (n == 0) continue;
@@ -215,16 +214,16 @@ bool VendorHost::SendProfile(int a) {
 bool VendorHost::WaitMotionDone(int a, bool include_capture) {
   AxisState& s = axis_[static_cast<std::size_t>(a)];
   const std::uint16_t mask = kMoveEvents | (include_capture ? pmd::event::kCaptureReceived : 0);
-  const auto give_up = Clock::now() + std::chrono::seconds(30);
+  const auto give_up = clock_->Now() + std::chrono::seconds(30);
   for (;;) {
     if (!GetWord(a, op::kGetEventStatus, &s.event_status)) return false;
     s.event_status_loaded = true;
     if ((s.event_status & mask) != 0) return true;
-    if (Clock::now() > give_up) {
+    if (clock_->Now() > give_up) {
       error_ = "motion never done on axis " + std::to_string(a);
       return false;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    clock_->SleepFor(std::chrono::milliseconds(5));
   }
 }
 
@@ -256,7 +255,7 @@ bool VendorHost::Move1(int a, bool with_capture, bool* capture_seen) {
     std::uint16_t activity = pmd::activity::kInMotion;
     while ((activity & pmd::activity::kInMotion) != 0) {
       if (!GetWord(a, op::kGetActivityStatus, &activity)) return false;
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      clock_->SleepFor(std::chrono::milliseconds(5));
     }
   }
   return true;

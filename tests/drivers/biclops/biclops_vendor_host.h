@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "biclops/pmd_codec.h"
+#include "common/clock.h"
 #include "serial/byte_link.h"
 
 namespace hgrasp::drivers {
@@ -36,7 +37,9 @@ struct VendorAxisConfig {
 
 class VendorHost {
  public:
-  explicit VendorHost(std::unique_ptr<ByteLink> link);
+  /// `clock`: every time the host reads and every wait (its reply deadlines, its motion-done
+  /// polls); a SimClock in simulated time (it must outlive the host).
+  explicit VendorHost(std::unique_ptr<ByteLink> link, Clock& clock = Clock::Wall());
 
   /// Biclops::Initialize: the controller's version, memory and cycle time, then every axis'
   /// hardware configuration. False on the first refused or broken reply (error()).
@@ -88,6 +91,7 @@ class VendorHost {
   bool WaitMotionDone(int axis, bool include_capture);
 
   std::unique_ptr<ByteLink> link_;
+  Clock* clock_;
   std::array<AxisState, 3> axis_{};
   std::array<std::int32_t, 3> zero_{};
   double cycle_s_ = 0.0;
