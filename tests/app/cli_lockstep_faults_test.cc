@@ -10,7 +10,8 @@
 // the same report and twin record, wall-clock timings aside.
 //
 // HGRASP_LOCKSTEP_FAULT_SEEDS=A..B runs those fault seeds once each instead, for a measurement
-// (the 50 seeds), and prints a line per seed and the tally.
+// (the 50 seeds), and prints a line per seed and the tally; HGRASP_LOCKSTEP_FAULT_RATE
+// sets the dropouts per second of such a measurement (0.2 by default).
 
 #include <gtest/gtest.h>
 
@@ -48,15 +49,16 @@ struct FaultRun {
   std::string logs_text;
 };
 
-FaultRun RunWithFaults(const fs::path& dir, int seed) {
+FaultRun RunWithFaults(const fs::path& dir, int seed, const std::string& dropouts = "0.2") {
   const std::string scene = std::string(HGRASP_ROOT_DIR) + "/scenarios/twin_robot.yaml";
-  const fs::path out = dir / ("seed" + std::to_string(seed));
+  const std::string name = std::to_string(seed) + (dropouts == "0.2" ? "" : "_at_" + dropouts);
+  const fs::path out = dir / ("seed" + name);
   fs::remove_all(out);
-  const fs::path logs = dir / ("commands" + std::to_string(seed) + ".json");
+  const fs::path logs = dir / ("commands" + name + ".json");
   const auto r = testing::RunHgrasp("run " + scene + " --lockstep --lean --out " + out.string() +
-                                        " --corrupt 0.01 --dropouts 0.2 --dropout-s 0.2 "
-                                        "--fault-seed " +
-                                        std::to_string(seed) + " --command-log " + logs.string(),
+                                        " --corrupt 0.01 --dropouts " + dropouts +
+                                        " --dropout-s 0.2 --fault-seed " + std::to_string(seed) +
+                                        " --command-log " + logs.string(),
                                     600);
   FaultRun f;
   f.status = r.status;
@@ -117,13 +119,13 @@ bool LogsMatch(const FaultRun& f, std::string* summary, std::string* why) {
 }
 
 // A range of fault seeds, once each: the tally of the measurement.
-void MeasureSeeds(const fs::path& dir, const std::string& range) {
+void MeasureSeeds(const fs::path& dir, const std::string& range, const std::string& dropouts) {
   const std::size_t dots = range.find("..");
   const int first = std::atoi(range.c_str());
   const int last = dots == std::string::npos ? first : std::atoi(range.c_str() + dots + 2);
   int lifted = 0, matched = 0, runs = 0;
   for (int seed = first; seed <= last; ++seed) {
-    const FaultRun f = RunWithFaults(dir, seed);
+    const FaultRun f = RunWithFaults(dir, seed, dropouts);
     ++runs;
     const double rise = f.twin.is_object() ? Rise(f.twin) : -1.0;
     std::string summary, why;
@@ -141,15 +143,18 @@ void MeasureSeeds(const fs::path& dir, const std::string& range) {
                 1e3 * rise, logs_ok ? "equal" : "NOT EQUAL");
     std::fflush(stdout);
   }
-  std::printf("fault seeds %s: %d runs, %d lifted by truth, %d with every log equal\n",
-              range.c_str(), runs, lifted, matched);
+  std::printf(
+      "fault seeds %s at %s dropouts/s: %d runs, %d lifted by truth, %d with every log "
+      "equal\n",
+      range.c_str(), dropouts.c_str(), runs, lifted, matched);
 }
 
 TEST(CliLockstepFaults, TheGraspSurvivesNoisyLinesEveryDeviceRanWhatItsDriverSentTwiceTheSame) {
   const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_lockstep_faults";
   fs::create_directories(dir);
   if (const char* seeds = std::getenv("HGRASP_LOCKSTEP_FAULT_SEEDS")) {
-    MeasureSeeds(dir, seeds);
+    const char* rate = std::getenv("HGRASP_LOCKSTEP_FAULT_RATE");
+    MeasureSeeds(dir, seeds, rate != nullptr ? rate : "0.2");
     return;
   }
   const FaultRun a = RunWithFaults(dir, kSuiteSeed);
