@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <optional>
 #include <set>
 
 #include "common/error.h"
@@ -15,20 +14,12 @@ namespace {
 
 constexpr double kFramePeriodS = 0.04;    // PAL, 25 frames/s
 constexpr double kSlewCountsPerS = 9000;  // fast move to the start of a sweep
-// A laser whose encoder moved at most this much over a frame has settled (counts).
-constexpr std::int32_t kLaserSettledCounts = 1;
 
 // Grabs frames until the laser stops; the last frame has it at rest. `failed`: the device whose
 // status ended it. The frames only keep time: grabbed without images.
-// At rest means the board's profile has ended (`moving` false) and the encoder has not moved
-// over a frame since: a motor's servo lags its profile, and the twin's laser was still 260
-// counts short of a 9000 counts/s slew's end when the board said it had stopped. The sweep then
-// began while the laser ran on to the start, and its first frames, exposed in that fast move,
-// lost every point to the stereo check: one empty column, which through a box split its faces.
 device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* frame,
                             const StopRequest* stop, std::string* failed) {
   device::StripeLaserState s;
-  std::optional<std::int32_t> still_at;  // the count when the profile was last seen ended
   for (int i = 0; i < 1000; ++i) {
     if (const auto st = dev.cameras->GrabWithoutImages(frame); st != device::Status::kOk) {
       *failed = "cameras";
@@ -42,14 +33,7 @@ device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* fram
       *failed = "laser";
       return st;
     }
-    if (s.moving) {
-      still_at.reset();
-      continue;
-    }
-    if (still_at && std::abs(s.encoder_count - *still_at) <= kLaserSettledCounts) {
-      return device::Status::kOk;
-    }
-    still_at = s.encoder_count;
+    if (!s.moving) return device::Status::kOk;
   }
   *failed = "laser";
   return device::Status::kTimeout;
