@@ -135,7 +135,14 @@ int Run(const RunOptions& o) {
             {"object_turned_deg", RadToDeg(turn.angle())}};
   };
   int pictures = 0;
+  std::string stage;  // the stage of the last frame, to say when a new one begins
   auto sink = [&](const device::StereoFrame& frame, const task::TaskView& view) {
+    if (view.stage != stage) {
+      // Said as it begins (its first frame): a user watching the robot, or a test that stops a
+      // device during the scan, knows where the task is.
+      stage = std::string(view.stage);
+      spdlog::info("run: {} (device time {:.2f} s)", stage, frame.t_s);
+    }
     const bool key = !view.moment.empty();
     if (!key && !video.isOpened()) return;
     const cv::Mat picture = ServoPicture(frame, view, robot_model.cameras.left);
