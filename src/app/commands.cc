@@ -72,13 +72,19 @@ cv::Mat LabelView(const cv::Mat& label) {
   return out;
 }
 
+// `hgrasp render` drives the simulated devices, which answer every call: a status other than ok
+// there is a bug in the simulator, not a device's failure.
+void SimulatedOk(device::Status s, const char* call) {
+  HGRASP_DEMAND_MSG(s == device::Status::kOk, call);
+}
+
 // Grabs frames until the laser has reached its target.
 device::StereoFrame GrabWhenSettled(device::RobotDevices& dev) {
   device::StereoFrame frame;
   device::StripeLaserState laser;
   for (int i = 0; i < 1000; ++i) {
-    dev.laser->Read(&laser);
-    dev.cameras->Grab(&frame);
+    SimulatedOk(dev.laser->Read(&laser), "laser read");
+    SimulatedOk(dev.cameras->Grab(&frame), "cameras grab");
     if (!laser.moving) break;
   }
   return frame;
@@ -102,9 +108,9 @@ int Render(const RenderOptions& o) {
   std::vector<Output> outputs;
 
   // Ambient light only.
-  dev.laser->SetLaser(false);
+  SimulatedOk(dev.laser->SetLaser(false), "laser off");
   device::StereoFrame frame;
-  dev.cameras->Grab(&frame);
+  SimulatedOk(dev.cameras->Grab(&frame), "cameras grab");
   outputs.push_back({"left.png", frame.left});
   outputs.push_back({"right.png", frame.right});
   for (int cam : {sim::kLeft, sim::kRight}) {
@@ -117,7 +123,7 @@ int Render(const RenderOptions& o) {
   }
 
   // The stripe at each requested encoder count.
-  dev.laser->SetLaser(true);
+  SimulatedOk(dev.laser->SetLaser(true), "laser on");
   for (std::int32_t count : o.encoder_counts) {
     Progress("stripe at encoder count " + std::to_string(count));
     if (dev.laser->MoveTo(count, 9000.0) != device::Status::kOk) {

@@ -5,7 +5,10 @@
 
 namespace hgrasp::device {
 
-enum class Status {
+/// [[nodiscard]]: every call that returns one is handled (or dropped with a cast that says why).
+// (clang-format takes the attribute for an initialiser and breaks the enum.)
+// clang-format off
+enum class [[nodiscard]] Status {
   kOk = 0,
   kTimeout,       ///< no reply within the device's timeout
   kBadReply,      ///< a reply arrived but failed its checksum or could not be parsed
@@ -15,6 +18,7 @@ enum class Status {
   /// (SIGINT, SIGTERM; common/stop_request.h).
   kInterrupted,
 };
+// clang-format on
 
 std::string_view ToString(Status s);
 

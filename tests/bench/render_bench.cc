@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <memory>
 
+#include "common/error.h"
 #include "sim/sim_devices.h"
 
 namespace hgrasp::sim {
@@ -52,14 +53,15 @@ void BM_Sweep300(benchmark::State& state) {
     state.PauseTiming();
     auto robot = DefaultRobot();
     auto dev = robot->TakeDevices();
-    dev.laser->SetLaser(true);
-    dev.laser->MoveTo(-2400, 90000);
+    HGRASP_DEMAND(dev.laser->SetLaser(true) == device::Status::kOk);
+    HGRASP_DEMAND(dev.laser->MoveTo(-2400, 90000) == device::Status::kOk);
     device::StereoFrame frame;
-    for (int i = 0; i < 60; ++i) dev.cameras->Grab(&frame);  // reach the start
+    for (int i = 0; i < 60; ++i)
+      HGRASP_DEMAND(dev.cameras->Grab(&frame) == device::Status::kOk);  // reach the start
     const int renders_before = robot->rig().full_renders();
     state.ResumeTiming();
-    dev.laser->MoveTo(2400, 4800 / (300 * 0.04));
-    for (int i = 0; i < 300; ++i) dev.cameras->Grab(&frame);
+    HGRASP_DEMAND(dev.laser->MoveTo(2400, 4800 / (300 * 0.04)) == device::Status::kOk);
+    for (int i = 0; i < 300; ++i) HGRASP_DEMAND(dev.cameras->Grab(&frame) == device::Status::kOk);
     benchmark::DoNotOptimize(frame);
     state.counters["renders_in_sweep"] = robot->rig().full_renders() - renders_before;
   }

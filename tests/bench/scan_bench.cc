@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 
+#include "common/error.h"
 #include "common/paths.h"
 #include "robot/calibration.h"
 #include "robot/head_kinematics.h"
@@ -39,10 +40,12 @@ void BM_StripeFramePair(benchmark::State& state) {
   Setup s = Make();
   std::vector<device::StereoFrame> frames;
   device::StereoFrame ambient;
-  s.dev.laser->SetLaser(false);
-  s.dev.cameras->Grab(&ambient);
-  s.dev.laser->SetLaser(true);
-  Sweep(s.dev, {2400, -2400, 60}, [&](const device::StereoFrame& f) { frames.push_back(f); });
+  HGRASP_DEMAND(s.dev.laser->SetLaser(false) == device::Status::kOk);
+  HGRASP_DEMAND(s.dev.cameras->Grab(&ambient) == device::Status::kOk);
+  HGRASP_DEMAND(s.dev.laser->SetLaser(true) == device::Status::kOk);
+  HGRASP_DEMAND(Sweep(s.dev, {2400, -2400, 60}, [&](const device::StereoFrame& f) {
+                  frames.push_back(f);
+                }) == device::Status::kOk);
   RangeImage range(240, 1);
   StripeFrameResult result;
   size_t i = 0, points = 0;

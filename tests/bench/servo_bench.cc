@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <memory>
 
+#include "common/error.h"
 #include "common/paths.h"
 #include "servo/control_law.h"
 #include "servo/gripper_tracker.h"
@@ -38,7 +39,7 @@ void BM_ServoStep(benchmark::State& state) {
     state.SkipWithError("no joints for the benchmark pose");
     return;
   }
-  dev.ArmOf(side).MoveJoints(*q);
+  HGRASP_DEMAND(dev.ArmOf(side).MoveJoints(*q) == device::Status::kOk);
   testing::Settle(dev, side, 6.0);
   GripperTracker tracker(side, layouts.Of(side), cameras, head);
   if (tracker.Initialise(*dev.leds, *dev.cameras) != TrackerStatus::kOk) {
@@ -46,7 +47,7 @@ void BM_ServoStep(benchmark::State& state) {
     return;
   }
   device::StereoFrame frame;
-  dev.cameras->Grab(&frame);
+  HGRASP_DEMAND(dev.cameras->Grab(&frame) == device::Status::kOk);
   Pose3 X_CT = tracker.pose();
   X_CT.translation() += Eigen::Vector3d(0.01, -0.02, 0.03);
   int measured = 0;

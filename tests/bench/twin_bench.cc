@@ -18,16 +18,16 @@
 #include <thread>
 #include <vector>
 
+#include "../sim/twin/twin_rig.h"
 #include "camera/gst_stereo_camera.h"
 #include "camera/gst_stereo_server.h"
+#include "common/error.h"
 #include "emulators/val2_emulator.h"
 #include "laser_board/board_devices.h"
 #include "laser_board/laser_board.h"
 #include "serial/serial_port.h"
 #include "sim/twin/twin.h"
 #include "val2/val2_arm.h"
-
-#include "../sim/twin/twin_rig.h"
 
 namespace hgrasp::sim {
 namespace {
@@ -55,8 +55,8 @@ void BM_TwinFramesToTheDriver(benchmark::State& state) {
     }
     const double speed = static_cast<double>(state.range(0));
     std::int32_t target = 4500;
-    rig.laser->SetLaser(true);
-    rig.laser->MoveTo(target, speed);
+    HGRASP_DEMAND(rig.laser->SetLaser(true) == device::Status::kOk);
+    HGRASP_DEMAND(rig.laser->MoveTo(target, speed) == device::Status::kOk);
     const drivers::GstCameraStats s0 = rig.camera->stats();
     device::StereoFrame frame;
     int failed = 0;
@@ -69,13 +69,13 @@ void BM_TwinFramesToTheDriver(benchmark::State& state) {
       device::StripeLaserState st;
       if (rig.laser->Read(&st) == Status::kOk && !st.moving) {
         target = -target;
-        rig.laser->MoveTo(target, speed);
+        HGRASP_DEMAND(rig.laser->MoveTo(target, speed) == device::Status::kOk);
       }
     }
     const double wall = Since(t0);
     const drivers::GstCameraStats s1 = rig.camera->stats();
-    rig.laser->Stop();
-    rig.laser->SetLaser(false);
+    HGRASP_DEMAND(rig.laser->Stop() == device::Status::kOk);
+    HGRASP_DEMAND(rig.laser->SetLaser(false) == device::Status::kOk);
     rig.StopTwin();
     const TwinFrameCounts c = rig.twin->frame_counts();
     state.counters["frames_per_s"] = static_cast<double>(s1.pairs - s0.pairs) / wall;

@@ -15,6 +15,7 @@
 #include "sim/random_scene.h"
 #include "sim/sim_devices.h"
 #include "tests/scan/sim_scan.h"
+#include "tests/support/status.h"
 
 namespace hgrasp::grasp {
 namespace {
@@ -26,10 +27,10 @@ void Settle(device::RobotDevices& dev, device::Side side, double max_s) {
   for (double t = 0; t < max_s; t += 0.04) {
     device::ArmState a;
     device::HandState h;
-    dev.ArmOf(side).Read(&a);
-    dev.HandOf(side).Read(&h);
+    EXPECT_OK(dev.ArmOf(side).Read(&a));
+    EXPECT_OK(dev.HandOf(side).Read(&h));
     if (!a.moving && !h.moving && t > 0.2) return;
-    dev.cameras->Grab(&frame);
+    EXPECT_OK(dev.cameras->Grab(&frame));
   }
 }
 
@@ -75,16 +76,16 @@ Outcome GraspAndLift(const sim::Scenario& scenario) {
     }
   }
   if (!found) return out;
-  dev.HandOf(plan->side).Open(plan->opening_m);
-  dev.ArmOf(plan->side).MoveJoints(plan->q_via);
+  EXPECT_OK(dev.HandOf(plan->side).Open(plan->opening_m));
+  EXPECT_OK(dev.ArmOf(plan->side).MoveJoints(plan->q_via));
   Settle(dev, plan->side, 8.0);
-  dev.ArmOf(plan->side).MoveJoints(plan->q_pre);
+  EXPECT_OK(dev.ArmOf(plan->side).MoveJoints(plan->q_pre));
   Settle(dev, plan->side, 8.0);
-  dev.ArmOf(plan->side).MoveJoints(plan->q);
+  EXPECT_OK(dev.ArmOf(plan->side).MoveJoints(plan->q));
   Settle(dev, plan->side, 4.0);
-  dev.HandOf(plan->side).Close(40.0);
+  EXPECT_OK(dev.HandOf(plan->side).Close(40.0));
   Settle(dev, plan->side, 3.0);
-  dev.ArmOf(plan->side).MoveJoints(q_lift);
+  EXPECT_OK(dev.ArmOf(plan->side).MoveJoints(q_lift));
   Settle(dev, plan->side, 4.0);
   out.rise_m = robot.world().BodyPose(object->body).translation().z() - z0;
   out.lifted = out.rise_m > 0.8 * scenario.task->lift_m;

@@ -12,6 +12,7 @@
 #include "scan/scanner.h"
 #include "sim/sim_devices.h"
 #include "sim/truth.h"
+#include "tests/support/status.h"
 
 namespace hgrasp::scan {
 namespace {
@@ -41,7 +42,7 @@ TEST(ScanAccuracyTest, SelfCalibrationRecoversTheLightPlane) {
   const robot::LaserCalibration& cal = *calibrated;
   std::printf("self-calibration quality: %s\n", report.Figures().c_str());
   device::HeadState hs;
-  dev.head->Read(&hs);
+  EXPECT_OK(dev.head->Read(&hs));
   const Pose3 X_WH = head.X_WH(hs.q);
   const sim::LaserPlaneError e = sim::CompareLaserPlanes(
       robot.rig(), [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, -2400, 2400);
@@ -71,14 +72,14 @@ ScanFigures ScanAgainstTruth(const sim::Scenario& scenario, bool stereo = true) 
                   robot::LoadLaserCalibration(ResolveDataPath("calibration/sim/laser.yaml")),
                   config);
   device::StereoFrame ambient;
-  dev.laser->SetLaser(false);
-  dev.cameras->Grab(&ambient);
-  dev.laser->SetLaser(true);
+  EXPECT_OK(dev.laser->SetLaser(false));
+  EXPECT_OK(dev.cameras->Grab(&ambient));
+  EXPECT_OK(dev.laser->SetLaser(true));
   ScanFigures fig;
   double sum2 = 0;
   RangeImage column(240, 1);
   StripeFrameResult result;
-  Sweep(dev, {}, [&](const device::StereoFrame& frame) {
+  EXPECT_OK(Sweep(dev, {}, [&](const device::StereoFrame& frame) {
     // Truth: our own stripe's points in the left image that the right camera sees too.
     const sim::CameraView& right = robot.rig().View(sim::kRight);
     std::vector<Eigen::Vector3d> truth;
@@ -106,7 +107,7 @@ ScanFigures ScanAgainstTruth(const sim::Scenario& scenario, bool stereo = true) 
       fig.covered += std::any_of(found.begin(), found.end(),
                                  [&](const Eigen::Vector3d& p) { return (p - t).norm() < 0.005; });
     }
-  });
+  }));
   fig.rms_mm = fig.points > 0 ? 1e3 * std::sqrt(sum2 / fig.points) : 0;
   return fig;
 }

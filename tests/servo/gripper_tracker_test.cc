@@ -20,6 +20,7 @@
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
 #include "tests/servo/servo_sim_util.h"
+#include "tests/support/status.h"
 
 namespace hgrasp::servo {
 namespace {
@@ -186,7 +187,7 @@ TEST_F(SimTracker, InitialiseTrackLoseAndRecover) {
     ++frames;
     if (tracker.Track(frame) == TrackerStatus::kOk) ++ok;
     device::ArmState a;
-    dev_.ArmOf(side).Read(&a);
+    EXPECT_OK(dev_.ArmOf(side).Read(&a));
     std::tie(dp, dr) = Error(tracker, side);
     if (a.moving) {
       worst_moving_p = std::max(worst_moving_p, dp);
@@ -269,9 +270,9 @@ TEST_F(SimTracker, AnUnwatchedRelativeMoveIsTakenOnTrustAndMeasuredAfter) {
       EXPECT_EQ(tracker.Track(frame), TrackerStatus::kOk) << "frame " << k << " after the move";
     }
     const auto [dp, dr] = Error(tracker, side);
-    std::printf("move (%.0f %.0f %.0f) mm: error %.2f mm %.2f deg\n",
-                1e3 * move.translation().x(), 1e3 * move.translation().y(),
-                1e3 * move.translation().z(), 1e3 * dp, dr * 180 / M_PI);
+    std::printf("move (%.0f %.0f %.0f) mm: error %.2f mm %.2f deg\n", 1e3 * move.translation().x(),
+                1e3 * move.translation().y(), 1e3 * move.translation().z(), 1e3 * dp,
+                dr * 180 / M_PI);
     EXPECT_LT(dp, kMaxPositionError);
     EXPECT_LT(dr, kMaxRotationError);
   }
@@ -286,8 +287,8 @@ TEST_F(SimTracker, IdentifiesAgainstTheOtherGrippersLeds) {
   const std::optional<device::Joint6> qr =
       JointsFor(device::Side::kRight, {0.22, -0.08, 0.20}, {0, 1, 0.2}, 0.4);
   ASSERT_TRUE(ql && qr);
-  dev_.ArmOf(device::Side::kLeft).MoveJoints(*ql);
-  dev_.ArmOf(device::Side::kRight).MoveJoints(*qr);
+  EXPECT_OK(dev_.ArmOf(device::Side::kLeft).MoveJoints(*ql));
+  EXPECT_OK(dev_.ArmOf(device::Side::kRight).MoveJoints(*qr));
   Settle(device::Side::kLeft, 10.0);
   Settle(device::Side::kRight, 10.0);
   ASSERT_EQ(dev_.leds->Set(device::Side::kRight, 0x3f), device::Status::kOk);
@@ -305,11 +306,11 @@ TEST_F(SimTracker, NotFoundWhenOutOfView) {
   // The arms' start pose keeps the grippers out of view (or at least not lit in view).
   GripperTracker tracker = MakeTracker(device::Side::kLeft);
   device::StereoFrame frame;
-  dev_.cameras->Grab(&frame);
+  EXPECT_OK(dev_.cameras->Grab(&frame));
   const bool in_view = !DetectLeds(frame.left).empty();
   if (in_view) GTEST_SKIP() << "gripper in view at start";
   ASSERT_EQ(dev_.leds->Set(device::Side::kLeft, 0x3f), device::Status::kOk);
-  dev_.cameras->Grab(&frame);
+  EXPECT_OK(dev_.cameras->Grab(&frame));
   if (!DetectLeds(frame.left).empty()) GTEST_SKIP() << "gripper in view at start";
   EXPECT_EQ(tracker.Initialise(*dev_.leds, *dev_.cameras), TrackerStatus::kNotFound);
   EXPECT_FALSE(tracker.tracking());

@@ -19,6 +19,7 @@
 #include "sim/scenario.h"
 #include "sim/sim_devices.h"
 #include "tests/servo/servo_sim_util.h"
+#include "tests/support/status.h"
 
 namespace hgrasp::servo {
 namespace {
@@ -116,7 +117,9 @@ class SimLeds : public ::testing::Test {
     const std::optional<device::Joint6> q =
         testing::JointsFacingCamera(robot_, dev_, side, p_W, approach_W, tilt);
     EXPECT_TRUE(q.has_value()) << "no joints reach " << p_W.transpose();
-    if (q) dev_.ArmOf(side).MoveJoints(*q);
+    if (q) {
+      EXPECT_OK(dev_.ArmOf(side).MoveJoints(*q));
+    }
     return testing::Settle(dev_, side, 10.0);
   }
 
@@ -163,7 +166,7 @@ TEST_F(SimLeds, TriangulatedLedsMatchGroundTruth) {
     for (int i = 0; i < leds; ++i) {
       ASSERT_EQ(dev_.leds->Set(side, 1u << i), device::Status::kOk);
       device::StereoFrame frame;
-      dev_.cameras->Grab(&frame);
+      EXPECT_OK(dev_.cameras->Grab(&frame));
       const std::vector<LedBlob> left = DetectLeds(frame.left), right = DetectLeds(frame.right);
       const std::vector<LedPoint> points =
           MatchAndTriangulate(left, right, cameras_, RectificationOf(frame));
@@ -226,7 +229,7 @@ objects:
                                          "red_box.yaml"));
   device::RobotDevices dev = robot.TakeDevices();
   device::StereoFrame frame;
-  dev.cameras->Grab(&frame);
+  EXPECT_OK(dev.cameras->Grab(&frame));
   // The boxes are in view: hundreds of strongly red pixels in each image.
   for (const cv::Mat& img : {frame.left, frame.right}) {
     std::vector<cv::Mat> ch;

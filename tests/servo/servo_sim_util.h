@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "common/error.h"
 #include "common/paths.h"
 #include "device/robot_devices.h"
 #include "robot/arm_kinematics.h"
@@ -25,7 +26,7 @@ inline std::optional<device::Joint6> JointsFacingCamera(
   const auto arm =
       robot::ArmKinematics::FromTree(tree, side == device::Side::kLeft ? "left" : "right");
   device::ArmState a;
-  dev.ArmOf(side).Read(&a);
+  HGRASP_DEMAND(dev.ArmOf(side).Read(&a) == device::Status::kOk);
   const Eigen::Vector3d z = approach_W.normalized();
   const Eigen::Vector3d to_camera = robot.rig().View(sim::kLeft).X_WC.translation() - p_W;
   const Eigen::Vector3d y0 = (to_camera - to_camera.dot(z) * z).normalized();
@@ -47,9 +48,9 @@ inline std::optional<device::Joint6> JointsFacingCamera(
 inline device::StereoFrame Settle(device::RobotDevices& dev, device::Side side, double max_s) {
   device::StereoFrame frame;
   for (double t = 0; t < max_s; t += 0.04) {
-    dev.cameras->Grab(&frame);
+    HGRASP_DEMAND(dev.cameras->Grab(&frame) == device::Status::kOk);
     device::ArmState a;
-    dev.ArmOf(side).Read(&a);
+    HGRASP_DEMAND(dev.ArmOf(side).Read(&a) == device::Status::kOk);
     if (!a.moving && t > 0.4) break;
   }
   return frame;

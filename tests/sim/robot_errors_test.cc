@@ -8,6 +8,7 @@
 
 #include "sim/sim_devices.h"
 #include "tests/sim/sim_test_util.h"
+#include "tests/support/status.h"
 
 namespace hgrasp::sim {
 namespace {
@@ -23,7 +24,7 @@ TEST(RobotErrors, TheSameSeedBuildsTheSameRobotAndAnotherSeedAnother) {
   const RobotErrorsSpec spec;
   const RobotErrors a = DrawRobotErrors(spec, 7), b = DrawRobotErrors(spec, 7),
                     c = DrawRobotErrors(spec, 8);
-  ASSERT_EQ(a.joints.size(), 15u);       // 2 x 6 arm joints and the head's 3
+  ASSERT_EQ(a.joints.size(), 15u);        // 2 x 6 arm joints and the head's 3
   ASSERT_EQ(a.body_offsets.size(), 16u);  // 2 x (base, 6 links, gripper)
   EXPECT_EQ(a.joints.at("left_j2").zero_rad, b.joints.at("left_j2").zero_rad);
   EXPECT_NE(a.joints.at("left_j2").zero_rad, c.joints.at("left_j2").zero_rad);
@@ -73,7 +74,7 @@ TEST(RobotErrors, SwitchedOffTheRobotIsItsModel) {
   EXPECT_EQ(w.EncoderReading(a), w.JointPosition("left_j2"));
   device::RobotDevices dev = robot.TakeDevices();
   device::ArmState s;
-  dev.ArmOf(Side::kLeft).Read(&s);
+  EXPECT_OK(dev.ArmOf(Side::kLeft).Read(&s));
   const Pose3 nominal = ArmForwardKinematics(w, Side::kLeft, s.q);
   const Pose3 truth = w.BodyPose(w.Id(mjOBJ_BODY, "left_gripper"));
   EXPECT_LT((nominal.translation() - truth.translation()).norm(), 1e-9);
@@ -82,19 +83,20 @@ TEST(RobotErrors, SwitchedOffTheRobotIsItsModel) {
 // Moves one joint of the left arm to `goal` (as its encoder reads) and lets it settle.
 void MoveJoint(device::RobotDevices* dev, int joint, double goal) {
   device::ArmState s;
-  dev->ArmOf(Side::kLeft).Read(&s);
+  EXPECT_OK(dev->ArmOf(Side::kLeft).Read(&s));
   device::Joint6 q = s.q;
   q[joint] = goal;
   ASSERT_EQ(dev->ArmOf(Side::kLeft).MoveJoints(q), device::Status::kOk);
   device::StereoFrame f;
-  for (int i = 0; i < 60; ++i) dev->cameras->GrabWithoutImages(&f);
+  for (int i = 0; i < 60; ++i) EXPECT_OK(dev->cameras->GrabWithoutImages(&f));
 }
 
 TEST(RobotErrors, AJointStandsOffItsEncoderByItsZeroAndHalfItsBacklash) {
   // Errors exaggerated so that they stand out of the servo's few-microradian settling: a zero
   // 0.5 deg off and 0.2 deg of backlash, encoder steps of 0.01 deg.
-  SimRobot robot(Empty("robot_errors: {arm_joint_zero_deg: 0.5, arm_backlash_deg: 0.2, "
-                       "arm_encoder_deg: 0.01}\n"));
+  SimRobot robot(
+      Empty("robot_errors: {arm_joint_zero_deg: 0.5, arm_backlash_deg: 0.2, "
+            "arm_encoder_deg: 0.01}\n"));
   World& w = robot.world();
   device::RobotDevices dev = robot.TakeDevices();
   const JointError& e = w.robot_errors().joints.at("left_j1");
@@ -103,7 +105,7 @@ TEST(RobotErrors, AJointStandsOffItsEncoderByItsZeroAndHalfItsBacklash) {
   device::ArmState s;
   // At home the link stands at the keyframe; its encoder reads that less the zero, in steps.
   const double home = w.JointPosition("left_j1");
-  dev.ArmOf(Side::kLeft).Read(&s);
+  EXPECT_OK(dev.ArmOf(Side::kLeft).Read(&s));
   EXPECT_NEAR(s.q[0], home - e.zero_rad, 0.5 * step + 1e-12);
   EXPECT_NEAR(s.q[0] / step, std::round(s.q[0] / step), 1e-6);
   // Moved up to an encoder angle: the motor goes to the nearest whole count, which the
@@ -114,12 +116,12 @@ TEST(RobotErrors, AJointStandsOffItsEncoderByItsZeroAndHalfItsBacklash) {
   ASSERT_GT(std::abs(count - target), 1e-7);  // a goal between counts
   MoveJoint(&dev, 0, target);
   EXPECT_NEAR(w.JointPosition("left_j1"), count + e.zero_rad - DegToRad(0.1), 2e-5);
-  dev.ArmOf(Side::kLeft).Read(&s);
+  EXPECT_OK(dev.ArmOf(Side::kLeft).Read(&s));
   EXPECT_NEAR(s.q[0], count, 1e-9);
   MoveJoint(&dev, 0, target + 0.1);
   MoveJoint(&dev, 0, target);
   EXPECT_NEAR(w.JointPosition("left_j1"), count + e.zero_rad + DegToRad(0.1), 2e-5);
-  dev.ArmOf(Side::kLeft).Read(&s);
+  EXPECT_OK(dev.ArmOf(Side::kLeft).Read(&s));
   EXPECT_NEAR(s.q[0], count, 1e-9);
 }
 
@@ -129,17 +131,17 @@ TEST(RobotErrors, ACommandMovesTheArmOnlyAfterItsLatency) {
   device::RobotDevices dev = robot.TakeDevices();
   const double q0 = w.JointPosition("left_j1");
   device::ArmState s;
-  dev.ArmOf(Side::kLeft).Read(&s);
+  EXPECT_OK(dev.ArmOf(Side::kLeft).Read(&s));
   device::Joint6 q = s.q;
   q[0] += 0.2;
   ASSERT_EQ(dev.ArmOf(Side::kLeft).MoveJoints(q), device::Status::kOk);
   device::StereoFrame f;
-  dev.cameras->GrabWithoutImages(&f);  // 40 ms
-  dev.cameras->GrabWithoutImages(&f);  // 80 ms: not yet started
+  EXPECT_OK(dev.cameras->GrabWithoutImages(&f));  // 40 ms
+  EXPECT_OK(dev.cameras->GrabWithoutImages(&f));  // 80 ms: not yet started
   EXPECT_NEAR(w.JointPosition("left_j1"), q0, 1e-4);
-  dev.ArmOf(Side::kLeft).Read(&s);
+  EXPECT_OK(dev.ArmOf(Side::kLeft).Read(&s));
   EXPECT_TRUE(s.moving);
-  for (int i = 0; i < 3; ++i) dev.cameras->GrabWithoutImages(&f);  // 200 ms: under way
+  for (int i = 0; i < 3; ++i) EXPECT_OK(dev.cameras->GrabWithoutImages(&f));  // 200 ms: under way
   EXPECT_GT(w.JointPosition("left_j1"), q0 + 1e-3);
 }
 
@@ -153,10 +155,10 @@ TEST(RobotErrors, TheOpenLoopGripperIsMillimetresFromWhereTheControllerBelievesI
     device::RobotDevices dev = robot.TakeDevices();
     for (Side side : {Side::kLeft, Side::kRight}) {
       device::ArmState s;
-      dev.ArmOf(side).Read(&s);
+      EXPECT_OK(dev.ArmOf(side).Read(&s));
       const Pose3 believed = ArmForwardKinematics(w, side, s.q);
-      const Pose3 truth = w.BodyPose(
-          w.Id(mjOBJ_BODY, std::string(device::ToString(side)) + "_gripper"));
+      const Pose3 truth =
+          w.BodyPose(w.Id(mjOBJ_BODY, std::string(device::ToString(side)) + "_gripper"));
       const double off = (believed.translation() - truth.translation()).norm();
       EXPECT_GT(off, 0.0005) << seed;
       EXPECT_LT(off, 0.010) << seed;
@@ -170,8 +172,8 @@ TEST(RobotErrors, TheLinksStandWhereTheErrorsPutThem) {
   const int body = w.Id(mjOBJ_BODY, "right_link3");
   const Eigen::Vector3d d = w.robot_errors().body_offsets.at("right_link3");
   for (int i = 0; i < 3; ++i) {
-    EXPECT_NEAR(w.model()->body_pos[3 * body + i] - w.nominal_model()->body_pos[3 * body + i],
-                d[i], 1e-15);
+    EXPECT_NEAR(w.model()->body_pos[3 * body + i] - w.nominal_model()->body_pos[3 * body + i], d[i],
+                1e-15);
   }
 }
 

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "tests/sim/sim_test_util.h"
+#include "tests/support/status.h"
 
 namespace hgrasp::sim {
 namespace {
@@ -27,7 +28,7 @@ class SimDevicesTest : public ::testing::Test {
     device::StereoFrame f;
     for (int i = 0; i < max_frames; ++i) {
       if (done()) return i;
-      dev_.cameras->Grab(&f);
+      EXPECT_OK(dev_.cameras->Grab(&f));
     }
     return max_frames;
   }
@@ -45,24 +46,24 @@ TEST_F(SimDevicesTest, GrabAdvancesTimeByOneFrameAndLatchesReadings) {
   EXPECT_EQ(a.left.cols, 320);
   EXPECT_EQ(a.left.type(), CV_8UC3);
   device::HeadState head;
-  dev_.head->Read(&head);
+  EXPECT_OK(dev_.head->Read(&head));
   EXPECT_NEAR(b.head.tilt, head.q.tilt, 1e-12);
   EXPECT_NEAR(b.head.verge, head.q.verge, 1e-12);
 }
 
 TEST_F(SimDevicesTest, HeadMovesToTargetWithinItsSpeedLimit) {
   device::HeadState s0, s;
-  dev_.head->Read(&s0);
+  EXPECT_OK(dev_.head->Read(&s0));
   const device::HeadJoints target{0.3, s0.q.tilt - 0.1, s0.q.verge + 0.02};
   ASSERT_EQ(dev_.head->MoveTo(target), Status::kOk);
   const int frames = GrabUntil(
       [&] {
-        dev_.head->Read(&s);
+        EXPECT_OK(dev_.head->Read(&s));
         return !s.moving && s.t_s > s0.t_s;
       },
       200);
   GrabUntil([] { return false; }, 10);  // settle
-  dev_.head->Read(&s);
+  EXPECT_OK(dev_.head->Read(&s));
   EXPECT_NEAR(s.q.pan, 0.3, 2e-3);
   EXPECT_NEAR(s.q.tilt, target.tilt, 2e-3);
   EXPECT_NEAR(s.q.verge, target.verge, 2e-3);
@@ -73,7 +74,7 @@ TEST_F(SimDevicesTest, HeadMovesToTargetWithinItsSpeedLimit) {
 
 TEST_F(SimDevicesTest, ArmJointMoveArrivesTogetherWithinSpeedLimits) {
   device::ArmState s0, s;
-  dev_.ArmOf(Side::kRight).Read(&s0);
+  EXPECT_OK(dev_.ArmOf(Side::kRight).Read(&s0));
   device::Joint6 goal = s0.q;
   goal[0] += 0.4;
   goal[3] += 0.6;
@@ -82,8 +83,8 @@ TEST_F(SimDevicesTest, ArmJointMoveArrivesTogetherWithinSpeedLimits) {
   double worst_ratio = 0;
   device::StereoFrame f;
   for (int i = 0; i < 100; ++i) {
-    dev_.cameras->Grab(&f);
-    dev_.ArmOf(Side::kRight).Read(&s);
+    EXPECT_OK(dev_.cameras->Grab(&f));
+    EXPECT_OK(dev_.ArmOf(Side::kRight).Read(&s));
     for (int j = 0; j < 6; ++j)
       worst_ratio = std::max(worst_ratio, std::abs(s.qd[j]) / DegToRad(limits_deg[j]));
   }
@@ -118,11 +119,11 @@ TEST_F(SimDevicesTest, HandOpensAndClosesWithLimitedForce) {
   device::HandState s;
   ASSERT_EQ(hand.Open(0.09), Status::kOk);
   GrabUntil([] { return false; }, 30);
-  hand.Read(&s);
+  EXPECT_OK(hand.Read(&s));
   EXPECT_NEAR(s.opening_m, 0.09, 1e-3);
   ASSERT_EQ(hand.Close(30.0), Status::kOk);
   GrabUntil([] { return false; }, 40);
-  hand.Read(&s);
+  EXPECT_OK(hand.Read(&s));
   EXPECT_LT(s.opening_m, 1e-3);
   EXPECT_LE(s.grip_force_n, 30.0 + 1e-6);
   EXPECT_EQ(hand.Close(-1.0), Status::kRejected);
@@ -151,15 +152,15 @@ TEST_F(SimDevicesTest, HiddenLedsRenderDarkOnlyWithinTheWindow) {
   const double t0 = w.time();
   w.HideLeds(t0 + 0.1, t0 + 0.3);
   device::StereoFrame f;
-  dev_.cameras->Grab(&f);  // t0 + 0.04: before the window
+  EXPECT_OK(dev_.cameras->Grab(&f));  // t0 + 0.04: before the window
   EXPECT_FALSE(w.leds_hidden());
   EXPECT_EQ(w.model()->geom_matid[led], on);
-  for (int i = 0; i < 3; ++i) dev_.cameras->Grab(&f);  // t0 + 0.16: inside
+  for (int i = 0; i < 3; ++i) EXPECT_OK(dev_.cameras->Grab(&f));  // t0 + 0.16: inside
   EXPECT_TRUE(w.leds_hidden());
   EXPECT_EQ(w.model()->geom_matid[led], off);
   ASSERT_EQ(dev_.leds->Set(Side::kLeft, 0b110), Status::kOk);  // switching while hidden
   EXPECT_EQ(w.model()->geom_matid[w.Id(mjOBJ_GEOM, "left_led1")], off);
-  for (int i = 0; i < 4; ++i) dev_.cameras->Grab(&f);  // t0 + 0.32: after
+  for (int i = 0; i < 4; ++i) EXPECT_OK(dev_.cameras->Grab(&f));  // t0 + 0.32: after
   EXPECT_FALSE(w.leds_hidden());
   EXPECT_EQ(w.model()->geom_matid[led], on);
   EXPECT_EQ(w.model()->geom_matid[w.Id(mjOBJ_GEOM, "left_led1")], on);
@@ -195,14 +196,14 @@ TEST_F(SimDevicesTest, LaserEncoderFollowsAConstantSpeedSweep) {
   device::StereoFrame f;
   std::vector<int> counts;
   for (int i = 0; i < 20; ++i) {
-    dev_.cameras->Grab(&f);
+    EXPECT_OK(dev_.cameras->Grab(&f));
     counts.push_back(f.laser_encoder_count);
   }
   // Mid-sweep, successive frames are 40 ms * 2500 counts/s = 100 counts apart (within lag).
   EXPECT_NEAR(counts[10] - counts[9], 100, 3);
   GrabUntil([] { return false; }, 20);
   device::StripeLaserState s;
-  dev_.laser->Read(&s);
+  EXPECT_OK(dev_.laser->Read(&s));
   EXPECT_NEAR(s.encoder_count, 1500, 2);
   EXPECT_EQ(dev_.laser->MoveTo(100000, 1000), Status::kRejected);
 }
@@ -315,14 +316,14 @@ TEST(SimRobotTest, SameScenarioAndSeedGiveTheSameFrames) {
   SimRobot a(scenario(7)), b(scenario(7)), c(scenario(8));
   auto da = a.TakeDevices(), db = b.TakeDevices(), dc = c.TakeDevices();
   for (auto* d : {&da, &db, &dc}) {
-    d->laser->SetLaser(true);
-    d->laser->MoveTo(500, 5000);
+    EXPECT_OK(d->laser->SetLaser(true));
+    EXPECT_OK(d->laser->MoveTo(500, 5000));
   }
   for (int k = 0; k < 3; ++k) {
     device::StereoFrame fa, fb, fc;
-    da.cameras->Grab(&fa);
-    db.cameras->Grab(&fb);
-    dc.cameras->Grab(&fc);
+    EXPECT_OK(da.cameras->Grab(&fa));
+    EXPECT_OK(db.cameras->Grab(&fb));
+    EXPECT_OK(dc.cameras->Grab(&fc));
     EXPECT_EQ(cv::norm(fa.left, fb.left, cv::NORM_INF), 0);
     EXPECT_EQ(cv::norm(fa.right, fb.right, cv::NORM_INF), 0);
     EXPECT_GT(cv::norm(fa.left, fc.left, cv::NORM_INF), 0);  // another seed, other noise

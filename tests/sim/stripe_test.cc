@@ -11,6 +11,7 @@
 #include "sim/stereo_rig.h"
 #include "sim/truth.h"
 #include "tests/sim/sim_test_util.h"
+#include "tests/support/status.h"
 
 namespace hgrasp::sim {
 namespace {
@@ -187,8 +188,10 @@ TEST_P(LaserShadow, NoStripeInTheLasersShadow) {
       }
     }
   }
-  std::printf("shadow, %d samples a pixel: %d rows seen in the laser's shadow (no stripe), "
-              "%d lit rows\n", GetParam(), shadowed, lit_rows);
+  std::printf(
+      "shadow, %d samples a pixel: %d rows seen in the laser's shadow (no stripe), "
+      "%d lit rows\n",
+      GetParam(), shadowed, lit_rows);
   EXPECT_GE(shadowed, 10);
   EXPECT_GE(lit_rows, 100);
 }
@@ -328,14 +331,14 @@ TEST(StripeTest, CacheThroughTheDevicesStaysWithinOneGreyLevel) {
   full.rig().set_cache_enabled(false);
   auto a = cached.TakeDevices(), b = full.TakeDevices();
   for (auto* d : {&a, &b}) {
-    d->laser->SetLaser(true);
-    d->laser->MoveTo(-2000, 4000);
+    EXPECT_OK(d->laser->SetLaser(true));
+    EXPECT_OK(d->laser->MoveTo(-2000, 4000));
   }
   int differing = 0;
   for (int k = 0; k < 12; ++k) {
     device::StereoFrame fa, fb;
-    a.cameras->Grab(&fa);
-    b.cameras->Grab(&fb);
+    EXPECT_OK(a.cameras->Grab(&fa));
+    EXPECT_OK(b.cameras->Grab(&fb));
     ASSERT_EQ(fa.laser_encoder_count, fb.laser_encoder_count);
     EXPECT_LE(cv::norm(fa.left, fb.left, cv::NORM_INF), 1) << "frame " << k;
     EXPECT_LE(cv::norm(fa.right, fb.right, cv::NORM_INF), 1) << "frame " << k;
@@ -378,23 +381,23 @@ TEST(StripeTest, FramesGrabbedWithoutImagesLeaveTheOtherFramesAsTheyWere) {
   };
   frames(1, 1);  // laser off: colour-only renders
   for (auto* d : {&a, &b}) {
-    d->laser->SetLaser(true);
-    d->laser->MoveTo(2400, 9000);  // the scan's slew to its start
+    EXPECT_OK(d->laser->SetLaser(true));
+    EXPECT_OK(d->laser->MoveTo(2400, 9000));  // the scan's slew to its start
   }
   frames(8, 4);
-  for (auto* d : {&a, &b}) d->laser->MoveTo(2000, 400);  // a stretch of sweep
+  for (auto* d : {&a, &b}) EXPECT_OK(d->laser->MoveTo(2000, 400));  // a stretch of sweep
   frames(4, 4);
   device::ArmState arm;
-  a.ArmOf(device::Side::kRight).Read(&arm);
+  EXPECT_OK(a.ArmOf(device::Side::kRight).Read(&arm));
   device::Joint6 goal = arm.q;
   goal[0] += 0.3;
   goal[1] += 0.2;
   for (auto* d : {&a, &b}) {
-    d->laser->SetLaser(false);
+    EXPECT_OK(d->laser->SetLaser(false));
     ASSERT_EQ(d->ArmOf(device::Side::kRight).MoveJoints(goal), device::Status::kOk);
   }
   frames(12, 2);  // the arm moving, then settling
-  for (auto* d : {&a, &b}) d->leds->Set(device::Side::kRight, 0b101);
+  for (auto* d : {&a, &b}) EXPECT_OK(d->leds->Set(device::Side::kRight, 0b101));
   frames(2, 2);
   const int renders_a = skipping.rig().full_renders() + skipping.rig().color_renders();
   const int renders_b = full.rig().full_renders() + full.rig().color_renders();

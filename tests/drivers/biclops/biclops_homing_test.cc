@@ -339,7 +339,9 @@ class PolledLink final : public ByteLink {
       std::weak_ptr<bool> alive = alive_;
       clock_.At(NextPoll(), [this, alive] {
         if (alive.expired()) return;
-        inner_->Write(out_);
+        // The wire takes what the poll hands it; a wire that refuses loses it (the twin's
+        // poll does the same), and the driver's own checks see the loss.
+        static_cast<void>(inner_->Write(out_));
         out_.clear();
       });
     }
@@ -351,7 +353,8 @@ class PolledLink final : public ByteLink {
     const Clock::TimePoint deadline = clock_.Now() + Clock::FromSeconds(std::max(timeout_s, 0.0));
     for (;;) {
       if (!in_.empty() && clock_.Now() >= in_at_) {
-        Take(0.0);  // what else arrived by this poll
+        // What else arrived by this poll (nothing: kTimeout).
+        if (const Status s = Take(0.0); s != Status::kOk && s != Status::kTimeout) return s;
         while (*n < buf.size() && !in_.empty()) {
           buf[(*n)++] = in_.front();
           in_.erase(in_.begin());
@@ -371,7 +374,8 @@ class PolledLink final : public ByteLink {
   }
   void Discard() override {
     // What reached the twin's end since its last poll is not the host's yet: it stays.
-    Take(0.0);
+    // A poll: nothing there is kTimeout, and a failed read leaves nothing to keep.
+    static_cast<void>(Take(0.0));
     inner_->Discard();
     if (clock_.Now() >= in_at_) in_.clear();
   }

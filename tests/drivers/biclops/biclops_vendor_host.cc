@@ -45,7 +45,12 @@ bool VendorHost::Send(const pmd::Command& c, int result_words, pmd::Reply* reply
       error_ = "no reply to opcode " + Hex(c.opcode);
       return false;
     }
-    link_->Read(std::span<std::uint8_t>(buf, 1), left, &n);
+    if (const device::Status s = link_->Read(std::span<std::uint8_t>(buf, 1), left, &n);
+        s != device::Status::kOk && s != device::Status::kTimeout) {
+      error_ =
+          "read failed (" + std::string(device::ToString(s)) + ") awaiting opcode " + Hex(c.opcode);
+      return false;
+    }
     if (n == 0) continue;
     const pmd::ReplyDecoder::Result r = decoder.Push(buf[0]);
     if (r == pmd::ReplyDecoder::Result::kNeedMore) continue;
@@ -97,7 +102,10 @@ bool VendorHost::SendRaw(std::span<const std::uint8_t> bytes, int reply_words,
   std::uint8_t b = 0;
   while (clock_->Now() < deadline) {
     std::size_t n = 0;
-    link_->Read(std::span<std::uint8_t>(&b, 1), 0.05, &n);
+    if (const device::Status s = link_->Read(std::span<std::uint8_t>(&b, 1), 0.05, &n);
+        s != device::Status::kOk && s != device::Status::kTimeout) {
+      return false;
+    }
     if (n == 0) continue;
     const pmd::ReplyDecoder::Result r = decoder.Push(b);
     if (r == pmd::ReplyDecoder::Result::kNeedMore) continue;

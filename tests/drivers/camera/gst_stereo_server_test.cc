@@ -199,7 +199,7 @@ TEST(GstStereoServer, TheDriverPairsTheCamerasByFrameNumberAndCountsGaps) {
   // driver saw them, and nothing was unpaired).
   device::StereoFrame frame;
   std::atomic<Status> grabbed{Status::kTimeout};
-  std::thread grab([&] { grabbed = camera->Grab(&frame); });
+  std::thread grab([&] { grabbed.store(camera->Grab(&frame)); });
   const auto push = [&](int c, std::uint64_t n) {
     std::this_thread::sleep_for(std::chrono::milliseconds(120));
     return server->Push(c, Pattern(n, c), n, 0.04 * static_cast<double>(n));

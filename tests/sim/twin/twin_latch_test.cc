@@ -26,6 +26,7 @@
 #include "laser_board/laser_board.h"
 #include "serial/serial_port.h"
 #include "sim/twin/twin.h"
+#include "tests/support/status.h"
 #include "twin_rig.h"
 
 namespace hgrasp::sim {
@@ -80,8 +81,8 @@ TEST(TwinLatchTest, EveryFramesEncoderCountIsTheTwinsAtItsExposure) {
   }
   const double grab_s = Since(t0);
   const drivers::GstCameraStats stats1 = camera->stats();
-  laser.Stop();
-  laser.SetLaser(false);
+  EXPECT_OK(laser.Stop());
+  EXPECT_OK(laser.SetLaser(false));
   rig.StopTwin();
 
   const std::vector<TwinExposure>& exposures = twin.exposures();

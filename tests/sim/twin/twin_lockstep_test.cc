@@ -22,6 +22,7 @@
 #include "sensorhand/sensorhand_hand.h"
 #include "sim/twin/lockstep_camera.h"
 #include "sim/twin/twin.h"
+#include "tests/support/status.h"
 #include "val2/val2_arm.h"
 
 namespace hgrasp::sim {
@@ -98,8 +99,8 @@ std::vector<Grabbed> Sweep(LockstepRig& rig, int n, std::vector<std::string>* fa
       if (rig.laser->MoveTo(target, top) != Status::kOk) failures->push_back("MoveTo");
     }
   }
-  rig.laser->Stop();
-  rig.laser->SetLaser(false);
+  EXPECT_OK(rig.laser->Stop());
+  EXPECT_OK(rig.laser->SetLaser(false));
   return grabbed;
 }
 
