@@ -15,11 +15,18 @@ namespace {
 constexpr double kFramePeriodS = 0.04;    // PAL, 25 frames/s
 constexpr double kSlewCountsPerS = 9000;  // fast move to the start of a sweep
 
-// Grabs frames until the laser stops; the last frame has it at rest. `failed`: the device whose
-// status ended it. The frames only keep time: grabbed without images.
+// A laser whose encoder moved at most this much over a frame has settled (counts).
+constexpr std::int32_t kLaserSettledCounts = 1;
+
+// Grabs frames until the laser stops: its board says the profile has ended and, with `at_rest`,
+// its encoder has since held still over a frame (SweepConfig::start_at_rest). The last frame has
+// it stopped. `failed`: the device whose status ended it. The frames only keep time: grabbed
+// without images.
 device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* frame,
-                            const StopRequest* stop, std::string* failed) {
+                            const StopRequest* stop, bool at_rest, std::string* failed) {
   device::StripeLaserState s;
+  bool ended = false;         // the profile was seen ended at the last read
+  std::int32_t ended_at = 0;  // the count then
   for (int i = 0; i < 1000; ++i) {
     if (const auto st = dev.cameras->GrabWithoutImages(frame); st != device::Status::kOk) {
       *failed = "cameras";
@@ -33,7 +40,15 @@ device::Status WaitForLaser(device::RobotDevices& dev, device::StereoFrame* fram
       *failed = "laser";
       return st;
     }
-    if (!s.moving) return device::Status::kOk;
+    if (s.moving) {
+      ended = false;
+      continue;
+    }
+    if (!at_rest || (ended && std::abs(s.encoder_count - ended_at) <= kLaserSettledCounts)) {
+      return device::Status::kOk;
+    }
+    ended = true;
+    ended_at = s.encoder_count;
   }
   *failed = "laser";
   return device::Status::kTimeout;
@@ -67,7 +82,10 @@ device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
     *failed = "laser";
     return st;
   }
-  if (auto st = WaitForLaser(dev, &frame, sweep.stop, failed); st != device::Status::kOk) return st;
+  if (auto st = WaitForLaser(dev, &frame, sweep.stop, sweep.start_at_rest, failed);
+      st != device::Status::kOk) {
+    return st;
+  }
   const double speed =
       std::abs(sweep.end_count - sweep.start_count) / (sweep.positions * kFramePeriodS);
   if (auto st = dev.laser->MoveTo(sweep.end_count, speed); st != device::Status::kOk) {
@@ -95,8 +113,8 @@ device::Status Sweep(device::RobotDevices& dev, const SweepConfig& sweep,
 }
 
 device::Status MoveHeadForScan(device::RobotDevices& dev, const device::HeadJoints& q,
-                               const StopRequest* stop, std::string* failed,
-                               double tolerance_rad, int settle_frames, int timeout_frames) {
+                               const StopRequest* stop, std::string* failed, double tolerance_rad,
+                               int settle_frames, int timeout_frames) {
   std::string ignored;
   if (failed == nullptr) failed = &ignored;
   device::HeadState head;
@@ -231,8 +249,8 @@ ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
   // Stripe positions the host missed are swept again, at the sweep's speed and in its
   // direction, and their frames put in their place: the columns stay in count order.
   const std::int32_t dir = sweep.end_count < sweep.start_count ? -1 : 1;
-  const double step = std::abs(sweep.end_count - sweep.start_count) /
-                      static_cast<double>(sweep.positions);
+  const double step =
+      std::abs(sweep.end_count - sweep.start_count) / static_cast<double>(sweep.positions);
   const auto in_order = [dir](const device::StereoFrame& a, const device::StereoFrame& b) {
     return dir * a.laser_encoder_count < dir * b.laser_encoder_count;
   };
@@ -255,6 +273,7 @@ ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
       again.end_count = b;
       again.positions = std::max(2, static_cast<int>(std::lround(std::abs(b - a) / step)));
       again.stop = sweep.stop;
+      again.start_at_rest = true;  // the gap's first frames are the ones it lacks
       int added = 0;
       const device::Status st = Sweep(
           dev, again,
@@ -289,30 +308,28 @@ ScanResult Scanner::Scan(device::RobotDevices& dev, const SweepConfig& sweep) {
 
 std::string LaserCalibrationReport::Figures() const {
   char text[320];
-  std::snprintf(text, sizeof text,
-                "%d of %d stripe positions determined a plane, %d consistent, spanning %.0f%% of "
-                "the sweep; residue RMS %.3f px, points %.3f mm RMS and planes %.3f deg (median) from "
-                "the model",
-                counts_fitted, frames, counts_used, 100.0 * span_fraction, rms_residue_px,
-                rms_point_mm, median_plane_deg);
+  std::snprintf(
+      text, sizeof text,
+      "%d of %d stripe positions determined a plane, %d consistent, spanning %.0f%% of "
+      "the sweep; residue RMS %.3f px, points %.3f mm RMS and planes %.3f deg (median) from "
+      "the model",
+      counts_fitted, frames, counts_used, 100.0 * span_fraction, rms_residue_px, rms_point_mm,
+      median_plane_deg);
   return text;
 }
 
-std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
-                                                      const robot::HeadKinematics& head,
-                                                      const robot::StereoIntrinsics& cameras,
-                                                      const SweepConfig& sweep,
-                                                      StripeFrameConfig config,
-                                                      LaserCalibrationReport* report_out,
-                                                      const LaserCalibrationQuality& quality) {
+std::optional<robot::LaserCalibration> CalibrateLaser(
+    device::RobotDevices& dev, const robot::HeadKinematics& head,
+    const robot::StereoIntrinsics& cameras, const SweepConfig& sweep, StripeFrameConfig config,
+    LaserCalibrationReport* report_out, const LaserCalibrationQuality& quality) {
   LaserCalibrationReport ignored;
   LaserCalibrationReport& report = report_out != nullptr ? *report_out : ignored;
   report = {};
   const auto device_failed = [&](const std::string& device, device::Status st) {
     report.failed_device = device;
     report.status = st;
-    report.failure =
-        device.empty() ? std::string(device::ToString(st)) : device + ": " + std::string(device::ToString(st));
+    report.failure = device.empty() ? std::string(device::ToString(st))
+                                    : device + ": " + std::string(device::ToString(st));
     return std::nullopt;
   };
   const auto below = [&](const std::string& why) {
@@ -337,32 +354,35 @@ std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
     return device_failed("laser", st);
   }
   std::string failed;
-  const device::Status swept = Sweep(dev, sweep, [&](const device::StereoFrame& f) {
-    if (!size_checked) CheckFrameSize(cameras, f), size_checked = true;
-    ++frames;
-    processor.Rectify(f.left, f.right);
-    std::vector<std::vector<Eigen::Vector3d>> rows;
-    processor.CandidatePairs(3, &rows);
-    std::vector<Eigen::Vector3d> pairs;
-    const auto c = FitCoefficientsRobust(rows, rect.f, 0.5, &pairs);
-    if (!c) return;
-    planes_H.emplace_back(f.laser_encoder_count,
-                          PlaneFromCoefficients(*c, rect.b).TransformedBy(X_HM));
-    // The pairs this count's fit keeps, triangulated without the plane, for the refinement.
-    std::vector<double> r(pairs.size());
-    double sum2 = 0;
-    for (size_t i = 0; i < pairs.size(); ++i) {
-      r[i] = c->Residue(pairs[i].x(), pairs[i].y(), pairs[i].z(), rect.f);
-      sum2 += r[i] * r[i];
-    }
-    const double rms = std::sqrt(sum2 / pairs.size());
-    for (size_t i = 0; i < pairs.size(); i += 2) {  // every other row is plenty
-      if (std::abs(r[i]) > 2.5 * rms) continue;
-      points_H.push_back({f.laser_encoder_count,
-                          X_HM * rect.Triangulate(pairs[i].x(), pairs[i].y(), pairs[i].z())});
-    }
-    observations.emplace_back(f.laser_encoder_count, std::move(pairs));
-  }, &failed);
+  const device::Status swept = Sweep(
+      dev, sweep,
+      [&](const device::StereoFrame& f) {
+        if (!size_checked) CheckFrameSize(cameras, f), size_checked = true;
+        ++frames;
+        processor.Rectify(f.left, f.right);
+        std::vector<std::vector<Eigen::Vector3d>> rows;
+        processor.CandidatePairs(3, &rows);
+        std::vector<Eigen::Vector3d> pairs;
+        const auto c = FitCoefficientsRobust(rows, rect.f, 0.5, &pairs);
+        if (!c) return;
+        planes_H.emplace_back(f.laser_encoder_count,
+                              PlaneFromCoefficients(*c, rect.b).TransformedBy(X_HM));
+        // The pairs this count's fit keeps, triangulated without the plane, for the refinement.
+        std::vector<double> r(pairs.size());
+        double sum2 = 0;
+        for (size_t i = 0; i < pairs.size(); ++i) {
+          r[i] = c->Residue(pairs[i].x(), pairs[i].y(), pairs[i].z(), rect.f);
+          sum2 += r[i] * r[i];
+        }
+        const double rms = std::sqrt(sum2 / pairs.size());
+        for (size_t i = 0; i < pairs.size(); i += 2) {  // every other row is plenty
+          if (std::abs(r[i]) > 2.5 * rms) continue;
+          points_H.push_back({f.laser_encoder_count,
+                              X_HM * rect.Triangulate(pairs[i].x(), pairs[i].y(), pairs[i].z())});
+        }
+        observations.emplace_back(f.laser_encoder_count, std::move(pairs));
+      },
+      &failed);
   const device::Status off = dev.laser->SetLaser(false);
   if (swept != device::Status::kOk) return device_failed(failed, swept);
   if (off != device::Status::kOk) return device_failed("laser", off);
@@ -436,11 +456,11 @@ std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
 
   // The calibration's own quality: coverage of the sweep, and how well the model explains the
   // per-count planes and the points.
-  const auto [lo, hi] = std::minmax_element(
-      consistent.begin(), consistent.end(),
-      [](const auto& a, const auto& b) { return a.first < b.first; });
-  report.span_fraction = static_cast<double>(hi->first - lo->first) /
-                         std::abs(sweep.end_count - sweep.start_count);
+  const auto [lo, hi] =
+      std::minmax_element(consistent.begin(), consistent.end(),
+                          [](const auto& a, const auto& b) { return a.first < b.first; });
+  report.span_fraction =
+      static_cast<double>(hi->first - lo->first) / std::abs(sweep.end_count - sweep.start_count);
   report.rms_residue_px = cal.rms_residual_px;
   report.rms_point_mm = 1e3 * rms_point_m;
   std::vector<double> plane_deg;
@@ -452,8 +472,9 @@ std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
   report.median_plane_deg = plane_deg[plane_deg.size() / 2];
   const double fitted = static_cast<double>(report.counts_fitted) / std::max(1, frames);
   if (fitted < quality.min_fitted_fraction || report.span_fraction < quality.min_span_fraction) {
-    return below("too few stripe positions fell on a non-planar target: the sweep needs one "
-                 "across its whole width (e.g. scenarios/calibration_target.yaml)");
+    return below(
+        "too few stripe positions fell on a non-planar target: the sweep needs one "
+        "across its whole width (e.g. scenarios/calibration_target.yaml)");
   }
   if (report.rms_residue_px > quality.max_rms_residue_px ||
       report.rms_point_mm > quality.max_rms_point_mm ||

@@ -6,9 +6,9 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
-#include <opencv2/core/mat.hpp>
 
 #include "common/stop_request.h"
 #include "device/robot_devices.h"
@@ -42,6 +42,15 @@ struct SweepConfig {
   /// Polled at every frame: when requested the sweep ends with Status::kInterrupted (the
   /// caller leaves the robot safe). May be null.
   const StopRequest* stop = nullptr;
+  /// Start from a laser at rest: after the board says the slew to the start has ended, wait until
+  /// its encoder holds still over a frame. A motor's servo lags its profile (the twin's laser was
+  /// 260 counts short of a 9000 counts/s slew's end when its board said it had stopped), and the
+  /// first frames, exposed in that fast move, lose every point to the stereo check. The scanner's
+  /// rescans of missed stretches set it: their first frames lie inside the gap (an empty column
+  /// through a box splits its faces). The whole sweep does not yet: its first frames lie at the
+  /// workspace's edge, and waiting there shifts the simulated cameras' noise draws of scenes
+  /// that stand at the edges of the perception tests (issue 37).
+  bool start_at_rest = false;
 };
 
 struct ScanResult {
@@ -132,22 +141,22 @@ class Scanner {
 /// wall; the interference scene), median plane angles of 5.3-51 deg, which the model alone
 /// would have written as a plane 45 deg from the truth.
 struct LaserCalibrationQuality {
-  double min_fitted_fraction = 0.6;  ///< frames whose stripe determined a plane, of all frames
-  double min_span_fraction = 0.8;    ///< the counts used span this much of the sweep
-  double max_rms_residue_px = 0.25;  ///< eq. 5 residue RMS over every pair, after the model fit
-  double max_rms_point_mm = 0.5;     ///< stripe points' RMS distance from the model's planes
+  double min_fitted_fraction = 0.6;   ///< frames whose stripe determined a plane, of all frames
+  double min_span_fraction = 0.8;     ///< the counts used span this much of the sweep
+  double max_rms_residue_px = 0.25;   ///< eq. 5 residue RMS over every pair, after the model fit
+  double max_rms_point_mm = 0.5;      ///< stripe points' RMS distance from the model's planes
   double max_median_plane_deg = 0.2;  ///< per-count planes' median angle from the model's
 };
 
 struct LaserCalibrationReport {
-  int frames = 0;              ///< frames in the sweep
-  int counts_fitted = 0;       ///< frames whose stripe determined a plane (eq. 6)
-  int counts_used = 0;         ///< of those, the planes consistent with their neighbours
-  double span_fraction = 0;    ///< the counts used span this fraction of the sweep's counts
-  double rms_residue_px = 0;   ///< eq. 5 residue over all pairs used, after the model fit
-  double rms_point_mm = 0;     ///< stripe points' RMS distance from the model's planes (mm)
+  int frames = 0;               ///< frames in the sweep
+  int counts_fitted = 0;        ///< frames whose stripe determined a plane (eq. 6)
+  int counts_used = 0;          ///< of those, the planes consistent with their neighbours
+  double span_fraction = 0;     ///< the counts used span this fraction of the sweep's counts
+  double rms_residue_px = 0;    ///< eq. 5 residue over all pairs used, after the model fit
+  double rms_point_mm = 0;      ///< stripe points' RMS distance from the model's planes (mm)
   double median_plane_deg = 0;  ///< per-count planes' median angle from the model's (deg)
-  std::string failed_device;   ///< set when a device's status ended the calibration
+  std::string failed_device;    ///< set when a device's status ended the calibration
   device::Status status = device::Status::kOk;  ///< that status
   std::string failure;  ///< empty when a calibration was made at the stated quality; else why
 
@@ -159,12 +168,9 @@ struct LaserCalibrationReport {
 /// the rotating-plane model over all counts, and measures the result against `quality`. The
 /// head must hold still. nullopt, with report->failure saying why, when a device's status ended
 /// it (report->failed_device) or the result is below `quality`.
-std::optional<robot::LaserCalibration> CalibrateLaser(device::RobotDevices& dev,
-                                                      const robot::HeadKinematics& head,
-                                                      const robot::StereoIntrinsics& cameras,
-                                                      const SweepConfig& sweep,
-                                                      StripeFrameConfig config,
-                                                      LaserCalibrationReport* report,
-                                                      const LaserCalibrationQuality& quality = {});
+std::optional<robot::LaserCalibration> CalibrateLaser(
+    device::RobotDevices& dev, const robot::HeadKinematics& head,
+    const robot::StereoIntrinsics& cameras, const SweepConfig& sweep, StripeFrameConfig config,
+    LaserCalibrationReport* report, const LaserCalibrationQuality& quality = {});
 
 }  // namespace hgrasp::scan
