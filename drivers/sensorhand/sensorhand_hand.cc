@@ -15,18 +15,18 @@ using sensorhand::MotionState;
 using sensorhand::Reply;
 using sensorhand::SpeedSetting;
 
-constexpr double kPollS = 0.003;            // the I/O loop's read wait (its period on a SimClock)
+constexpr double kPollS = 0.003;             // the I/O loop's read wait (its period on a SimClock)
 constexpr double kStreamRetryS = 0.1;        // 0x73 at most this often while the stream is silent
 constexpr double kDisconnectedFailS = 0.05;  // a vanished port fails a call after this
 constexpr std::size_t kHistory = 16;         // samples kept
 constexpr int kForceSettledSamples = 5;      // the grip force has not risen over 5 samples (60 ms)
-constexpr int kVotes = 2;          // late samples that must show a setting before it is believed
-constexpr int kContradictions = 3;  // late samples in a row against known_: an anomaly
+constexpr int kVotes = 2;            // late samples that must show a setting before it is believed
+constexpr int kContradictions = 3;   // late samples in a row against known_: an anomaly
 constexpr double kStillM_s = 0.001;  // estimated slower than this: the fingers are still
 constexpr double kContactN = 0.5;    // a grip force above this: the pads touch an object
-constexpr double kEndMarginM = 0.005;  // "at an end stop": this near it, beyond the uncertainty
+constexpr double kEndMarginM = 0.005;    // "at an end stop": this near it, beyond the uncertainty
 constexpr double kContactMemoryS = 0.2;  // an object the pads touched this recently is still there
-constexpr int kMaxReversals = 3;     // Open() gives up hunting after this many turns
+constexpr int kMaxReversals = 3;         // Open() gives up hunting after this many turns
 // One byte on the hand's line (8N1 at 19200 baud: 10 bits, 0.52 ms). A stream frame describes
 // the hand when its first byte left; its last arrives kDumpFrameBytes bytes later (6.25 ms).
 constexpr double kByteS = 10.0 / sensorhand::kBaud;
@@ -34,9 +34,7 @@ constexpr double kDumpWireS = sensorhand::kDumpFrameBytes * kByteS;
 const double kEchoWireS =
     static_cast<double>(sensorhand::EncodeSpeedEcho(SpeedSetting{}).size()) * kByteS;
 
-double Seconds(Clock::Duration d) {
-  return Clock::ToSeconds(d);
-}
+double Seconds(Clock::Duration d) { return Clock::ToSeconds(d); }
 
 void Check(bool ok, const char* field, double value, const char* expected) {
   if (!ok)
@@ -587,8 +585,12 @@ SpeedSetting SensorHandHand::Control(Clock::TimePoint now) {
         return sensorhand::kStop;
       }
       if (Blocked()) {
-        // Blocked: at an end stop (the estimate is fixed there).
-        goal_.done = true;
+        // Blocked: at an end stop (the estimate is fixed there). A move into it is done. A move
+        // to a target short of it had its stop lost on the line (in a dropout, say) and ran on:
+        // it goes on from the known opening once the fingers are stopped (the turn back counts
+        // against hunting). Taken as done, the move ended with the hand shut where the plan
+        // wanted it 81 mm open (fault seed 28 of the whole run through the twin's noisy lines).
+        if (goal_.to_end) goal_.done = true;
         return sensorhand::kStop;
       }
       if (goal_.to_end) return known_;
@@ -718,7 +720,7 @@ Status SensorHandHand::Read(device::HandState* state) {
 bool SensorHandHand::WaitIdle(double timeout_s) {
   std::unique_lock<std::mutex> lock(mu_);
   return clock_.WaitUntil(lock, cv_, clock_.Now() + Clock::FromSeconds(timeout_s),
-                      [&] { return goal_.done && !pending_ && known_.stopped() && !Moving(); });
+                          [&] { return goal_.done && !pending_ && known_.stopped() && !Moving(); });
 }
 
 std::vector<SpeedSetting> SensorHandHand::executed() const {
