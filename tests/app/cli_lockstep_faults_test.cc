@@ -37,10 +37,9 @@ using nlohmann::json;
 using testing::ReadJson;
 using testing::WithoutWallTimes;
 
-// The fault seed of the suite's run. Fault seeds 1-50 were measured (the issue's closing note);
-// this one is the first of them whose run lifts, so that the test fails on what it checks
-// (logs, repeatability) rather than on the Biclops' open residual.
-constexpr int kSuiteSeed = 2;
+// The fault seed of the suite's run: the first of the seeds 1-50 measured for issue 36 (its
+// closing notes). It was 2 while seed 1's run failed in the Biclops homing (fixed in b7e4d40).
+constexpr int kSuiteSeed = 1;
 
 struct FaultRun {
   int status = -1;
