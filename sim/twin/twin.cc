@@ -157,6 +157,7 @@ void Twin::RenderLoop() {
     std::array<std::uint32_t, 2> leds{};
     bool laser = false;
     std::uint64_t frame = 0;
+    std::int32_t count = 0;
     double t = 0.0;
     {
       std::unique_lock<std::mutex> lock(render_mu_);
@@ -165,11 +166,12 @@ void Twin::RenderLoop() {
       leds = job_leds_;
       laser = job_laser_;
       frame = job_frame_;
+      count = job_count_;
       t = job_t_;
       job_pending_ = false;
     }
     // job_data_ stays as it is until rendering_ is cleared (Expose writes it only then).
-    Render(*world, *rig, job_data_, leds, laser, frame, t);
+    Render(*world, *rig, job_data_, leds, laser, frame, count, t);
     std::lock_guard<std::mutex> lock(render_mu_);
     rendering_ = false;
   }
@@ -177,7 +179,7 @@ void Twin::RenderLoop() {
 
 void Twin::Render(World& world, StereoRig& rig, const mjData* state,
                   const std::array<std::uint32_t, 2>& leds, bool laser, std::uint64_t frame,
-                  double t) {
+                  std::int32_t encoder_count, double t) {
   mj_copyData(world.data(), world.model(), state);
   const int count = world.LedCount("left");
   for (int s = 0; s < 2; ++s) {
@@ -188,6 +190,7 @@ void Twin::Render(World& world, StereoRig& rig, const mjData* state,
   world.set_laser_on(laser);
   const auto t0 = std::chrono::steady_clock::now();
   StereoImages images = rig.Expose(frame);
+  if (render_observer_) render_observer_(rig, encoder_count, laser);
   if (sink_) {
     for (int c = 0; c < 2; ++c) sink_(c, images.image[c], frame, t);
   }
@@ -201,7 +204,8 @@ void Twin::Render(World& world, StereoRig& rig, const mjData* state,
 bool Twin::Develop() {
   if (options_.lockstep == nullptr || !job_pending_) return false;
   job_pending_ = false;
-  Render(*render_world_, *render_rig_, job_data_, job_leds_, job_laser_, job_frame_, job_t_);
+  Render(*render_world_, *render_rig_, job_data_, job_leds_, job_laser_, job_frame_, job_count_,
+         job_t_);
   for (auto it = exposures_.rbegin(); it != exposures_.rend(); ++it) {
     if (it->frame == job_frame_) {
       it->rendered = true;
@@ -277,6 +281,7 @@ void Twin::Expose(double late_s) {
     job_leds_ = {board_->LedMask(0), board_->LedMask(1)};
     job_laser_ = world_->laser_on();
     job_frame_ = frame_;
+    job_count_ = e.encoder_count;
     job_t_ = e.t_s;
     job_pending_ = true;
     exposures_.push_back(e);
@@ -291,6 +296,7 @@ void Twin::Expose(double late_s) {
       job_leds_ = {board_->LedMask(0), board_->LedMask(1)};
       job_laser_ = world_->laser_on();
       job_frame_ = frame_;
+      job_count_ = e.encoder_count;
       job_t_ = e.t_s;
       job_pending_ = rendering_ = true;
       e.rendered = true;

@@ -146,6 +146,16 @@ class Twin {
   SerialLine* line(const std::string& key);
   std::vector<SerialLine*> lines();
 
+  /// Called after each exposure is rendered, with the rig that rendered it (its
+  /// last_crossings() are that exposure's stripe), the encoder count the board latched at the
+  /// exposure and whether the laser was on: the ground truth of what the cameras saw, for a
+  /// report (`hgrasp run --lockstep` scores its scan with it). In lockstep on the thread that
+  /// develops the frame (the clock's); otherwise on the render thread. Set it before the
+  /// cameras run.
+  using RenderObserver =
+      std::function<void(StereoRig& rig, std::int32_t encoder_count, bool laser_on)>;
+  void set_render_observer(RenderObserver observer) { render_observer_ = std::move(observer); }
+
   /// The cameras stop delivering frames (exposures still latch) / start again.
   void StopCameras(bool stop) { cameras_stopped_ = stop; }
 
@@ -173,11 +183,13 @@ class Twin {
   // Renders the state `state` with the LEDs and the laser given into the sink, in `world` (the
   // renderer's own) through `rig`; adds to frames_ (under render_mu_).
   void Render(World& world, StereoRig& rig, const mjData* state,
-              const std::array<std::uint32_t, 2>& leds, bool laser, std::uint64_t frame, double t);
+              const std::array<std::uint32_t, 2>& leds, bool laser, std::uint64_t frame,
+              std::int32_t encoder_count, double t);
 
   Scenario scenario_;
   TwinOptions options_;
   FrameSink sink_;
+  RenderObserver render_observer_;
   std::unique_ptr<World> world_;
   // The render thread and its job: the world's state at the exposure (a copy), the LEDs and
   // the laser switch, the frame. Guarded by render_mu_.
@@ -189,6 +201,7 @@ class Twin {
   std::array<std::uint32_t, 2> job_leds_{};
   bool job_laser_ = false;
   std::uint64_t job_frame_ = 0;
+  std::int32_t job_count_ = 0;
   double job_t_ = 0.0;
   bool job_pending_ = false, rendering_ = false, render_ready_ = false, render_stop_ = false;
   std::string render_error_;

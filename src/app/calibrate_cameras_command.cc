@@ -128,28 +128,27 @@ int CalibrateCameras(const CalibrateCamerasOptions& o) {
                    {"right", CameraJson(fit.cameras.right)},
                    {"baseline_m", fit.baseline_m},
                    {"rms_px", fit.rms_px}};
-    if (sim::SimRobot* twin = robot.truth()) {
+    if (const TruthWorld* twin = robot.truth()) {
       // The twin's true cameras, and their optical centres now (the verge is the calibration's).
-      sim::StereoRig& rig = twin->rig();
+      sim::StereoRig& rig = *twin->rig;
       const PinholeCamera truth[2] = {rig.renderer().Intrinsics(rig.camera_id(0)),
                                       rig.renderer().Intrinsics(rig.camera_id(1))};
       const double true_baseline =
-          (sim::Renderer::OpticalFramePose(twin->world().data(), rig.camera_id(0)).translation() -
-           sim::Renderer::OpticalFramePose(twin->world().data(), rig.camera_id(1)).translation())
+          (sim::Renderer::OpticalFramePose(twin->world->data(), rig.camera_id(0)).translation() -
+           sim::Renderer::OpticalFramePose(twin->world->data(), rig.camera_id(1)).translation())
               .norm();
       const nlohmann::json left = CameraError(fit.cameras.left, truth[0]);
       const nlohmann::json right = CameraError(fit.cameras.right, truth[1]);
-      json["truth"] = {
-          {"left", CameraJson(truth[0])},
-          {"right", CameraJson(truth[1])},
-          {"baseline_m", true_baseline},
-          {"calibrated_error",
-           {{"left", left},
-            {"right", right},
-            {"baseline_mm", 1e3 * std::abs(fit.baseline_m - true_baseline)}}},
-          {"nominal_error",
-           {{"left", CameraError(nominal.left, truth[0])},
-            {"right", CameraError(nominal.right, truth[1])}}}};
+      json["truth"] = {{"left", CameraJson(truth[0])},
+                       {"right", CameraJson(truth[1])},
+                       {"baseline_m", true_baseline},
+                       {"calibrated_error",
+                        {{"left", left},
+                         {"right", right},
+                         {"baseline_mm", 1e3 * std::abs(fit.baseline_m - true_baseline)}}},
+                       {"nominal_error",
+                        {{"left", CameraError(nominal.left, truth[0])},
+                         {"right", CameraError(nominal.right, truth[1])}}}};
       truth_line = fmt::format(
           "; against the twin's cameras: focal {:.3f}% / {:.3f}%, principal point {:.2f} / {:.2f} "
           "px, baseline {:.3f} mm off (the nominal file's focal {:.3f}% / {:.3f}%)",
@@ -179,8 +178,8 @@ int CalibrateCameras(const CalibrateCamerasOptions& o) {
   std::snprintf(note, sizeof note,
                 "Measured by `hgrasp calibrate cameras %s`: %d stereo views of a %dx%d chessboard "
                 "of %.1f mm squares,\nreprojection RMS %.3f px; fitted baseline %.2f mm.",
-                o.scenario.c_str(), fit.views, o.board_cols, o.board_rows, o.square_mm,
-                fit.rms_px, 1e3 * fit.baseline_m);
+                o.scenario.c_str(), fit.views, o.board_cols, o.board_rows, o.square_mm, fit.rms_px,
+                1e3 * fit.baseline_m);
   robot::SaveStereoIntrinsics(fit.cameras, o.out_file, note);
   spdlog::info(
       "calibrate cameras: {} of {} views, RMS {:.3f} px; left f {:.2f}/{:.2f} c ({:.2f}, {:.2f}), "

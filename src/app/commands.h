@@ -155,6 +155,8 @@ struct SweepOptions {
   std::string baseline;        ///< compare with this baseline; regressions exit 1
   std::string write_baseline;  ///< write the sweep's baseline here
   std::string hgrasp;          ///< the program each scene runs with (default: this hgrasp)
+  /// Each scene through the real drivers against the twin in lockstep (`STAGE --lockstep`).
+  bool lockstep = false;
   /// This process runs shard index/count of the sweep in out_dir (a Slurm array task): its
   /// scenes only, no summary (`hgrasp sweep merge` writes it).
   std::optional<std::pair<int, int>> shard;

@@ -95,14 +95,18 @@ bool EndedAtStart(Robot& robot, const sim::Scenario& scenario, OutputDir* out,
   const StartFailure& f = *robot.start_failure;
   if (out != nullptr) {
     WriteFileWhole(out->Path("report.json"), f.Report(scenario, safe).dump(2) + "\n");
-    if (robot.lockstep) {
-      WriteFileWhole(out->Path("twin.json"), robot.lockstep->Report().dump(1) + "\n");
-    }
+    WriteTwinRecord(robot, *out);
     out->Commit();
   }
   spdlog::error("{}: {}: {}{}", command, f.failure(), f.detail,
                 out != nullptr ? "; wrote " + out->dir() : std::string("; nothing written"));
   return true;
+}
+
+void WriteTwinRecord(const Robot& robot, OutputDir& out) {
+  if (robot.lockstep) {
+    WriteFileWhole(out.Path("twin.json"), robot.lockstep->Report().dump(1) + "\n");
+  }
 }
 
 drivers::DevicesConfig LockstepDevices(const drivers::DevicesConfig& given) {
@@ -168,6 +172,12 @@ Robot OpenRobot(const sim::Scenario& given, const StopRequest* stop,
   if (scenario.devices.AnySimulated()) robot.twin = std::make_unique<sim::SimRobot>(scenario);
   robot.devices = lockstep != nullptr ? MakeLockstepDevices(scenario, robot)
                                       : MakeDevices(scenario, robot.twin.get());
+  if (robot.all_simulated && robot.twin) {
+    robot.truth_world = TruthWorld{&robot.twin->world(), &robot.twin->rig()};
+  } else if (robot.lockstep) {
+    robot.lockstep_truth_rig = std::make_unique<sim::StereoRig>(&robot.lockstep->world());
+    robot.truth_world = TruthWorld{&robot.lockstep->world(), robot.lockstep_truth_rig.get()};
+  }
   // A stock SensorHand measures no finger position: its driver integrates the commanded speeds
   // from an assumed start. A real hand that holds nothing opens to its end stop, where the
   // opening is known exactly; one that grips (a box held since the last run) keeps gripping.

@@ -41,6 +41,16 @@ struct StartFailure {
   nlohmann::json Report(const sim::Scenario& scenario, const SafeStopReport& safe) const;
 };
 
+/// Where a command's ground truth comes from: the world the devices act in and the true
+/// cameras on it (sim::TruthJson, sim::ScanTruth, sim::BoxTruth read them). Only a run on the
+/// twin has one: every device simulated, or every real driver against the lockstep twin (whose
+/// world the task's thread may read between its waits: the clock runs the twin on that same
+/// thread). Reports take their `truth` block from it; the pipeline never sees it.
+struct TruthWorld {
+  sim::World* world = nullptr;
+  sim::StereoRig* rig = nullptr;
+};
+
 /// The robot a command works with. It is left safe (LeaveSafe) when the command is done; if
 /// the command never gets there (an exception), its destructor does it.
 struct Robot {
@@ -57,12 +67,16 @@ struct Robot {
   std::unique_ptr<SimClock> clock;
   std::unique_ptr<sim::Twin> lockstep;
   std::shared_ptr<sim::LockstepFrames> frames;
+  /// Lockstep: the true cameras on the twin's world, for the truth (rendered only by a report).
+  std::unique_ptr<sim::StereoRig> lockstep_truth_rig;
   device::RobotDevices devices;
   bool all_simulated = false;
 
-  /// The twin when every device is simulated: only then does its ground truth describe what
-  /// the devices saw (and may go into reports). Else nullptr.
-  sim::SimRobot* truth() const { return all_simulated ? twin.get() : nullptr; }
+  /// The ground truth of what the devices saw, when there is one: the simulated robot's when
+  /// every device is simulated, the lockstep twin's in lockstep. Else nullptr (a real robot, or
+  /// a mix: then the world does not describe every device).
+  const TruthWorld* truth() const { return truth_world ? &*truth_world : nullptr; }
+  std::optional<TruthWorld> truth_world;
 
   /// app::LeaveSafe on the devices (safe_stop.h); logs what did not take it.
   SafeStopReport LeaveSafe();
@@ -75,6 +89,10 @@ struct Robot {
 };
 
 class OutputDir;
+
+/// Lockstep: writes the twin's account beside the report (twin.json: truth, exposures, every
+/// command its emulators executed) into `out`'s staging; nothing otherwise.
+void WriteTwinRecord(const Robot& robot, OutputDir& out);
 
 /// When the robot failed to start: leaves it safe, writes the start failure's report into `out`
 /// (null: no report, as `calibrate laser` has none), logs it for `command` and returns true.

@@ -302,6 +302,9 @@ int main(int argc, char** argv) {
                         "compare with this baseline; a regression exits 1");
   cmd_sweep->add_option("--write-baseline", sweep.write_baseline,
                         "write this sweep's figures as a baseline");
+  cmd_sweep->add_flag("--lockstep", sweep.lockstep,
+                      "each scene through the real drivers against the twin in simulated time "
+                      "(the stage's --lockstep), scored against the twin's truth");
   cmd_sweep->add_option("--hgrasp", sweep.hgrasp,
                         "the program the scenes run with (default: this hgrasp; e.g. another "
                         "build, or a wrapper)");

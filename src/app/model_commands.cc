@@ -53,20 +53,35 @@ nlohmann::json Mat(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-void RecordScanTruth(sim::SimRobot* robot, sim::ScanTruth* truth,
-                     const device::StereoFrame& frame, const task::TaskView& view) {
-  // Frames without images are the laser's slew before the sweep, not the scan's.
-  if (robot == nullptr || view.stage != "look" || !view.moment.empty() || !frame.laser_on ||
-      frame.left.empty()) {
-    return;
-  }
-  truth->AddFrame(robot->rig(), frame.laser_encoder_count);
+ScanTruthRecorder::ScanTruthRecorder(Robot& robot) : robot_(robot) {
+  if (robot_.truth() == nullptr || !robot_.lockstep) return;
+  // Lockstep: the twin renders each frame a camera takes on this thread (Develop), its rig's
+  // crossings then that exposure's. The look's sweep is the task's first scan.
+  robot_.lockstep->set_render_observer(
+      [this](sim::StereoRig& rig, std::int32_t encoder_count, bool laser_on) {
+        if (recording_ && laser_on) truth_.AddFrame(rig, encoder_count);
+      });
 }
 
-nlohmann::json LookTruth(sim::SimRobot& robot, const task::TaskResult& r,
+ScanTruthRecorder::~ScanTruthRecorder() {
+  if (robot_.lockstep) robot_.lockstep->set_render_observer(nullptr);
+}
+
+void ScanTruthRecorder::OnFrame(const device::StereoFrame& frame, const task::TaskView& view) {
+  // Frames without images are the laser's slew before the sweep, not the scan's.
+  if (robot_.truth() == nullptr || robot_.lockstep || !recording_ || view.stage != "look" ||
+      !view.moment.empty() || !frame.laser_on || frame.left.empty()) {
+    return;
+  }
+  truth_.AddFrame(*robot_.truth()->rig, frame.laser_encoder_count);
+}
+
+void ScanTruthRecorder::Stop() { recording_ = false; }
+
+nlohmann::json LookTruth(const TruthWorld& truth_world, const task::TaskResult& r,
                          const sim::ScanTruth& scan_truth) {
-  const sim::World& world = robot.world();
-  nlohmann::json truth = sim::TruthJson(world, robot.rig(), {});
+  const sim::World& world = *truth_world.world;
+  nlohmann::json truth = sim::TruthJson(world, *truth_world.rig, {});
   if (!r.scan || !r.scene) return truth;  // the scan ended early (a device failed)
   const scan::RangeImage& range = r.scan->range;
   const model::SceneModel& scene = *r.scene;
@@ -106,11 +121,14 @@ nlohmann::json LookTruth(sim::SimRobot& robot, const task::TaskResult& r,
 
   // The segmentation against the faces the left camera truly sees (the head has not moved since
   // the scan), after Hoover et al.
-  const std::vector<int> faces = sim::TrueFaceLabels(world, &robot.rig(), sim::kLeft, p_W);
+  const std::vector<int> faces = sim::TrueFaceLabels(world, truth_world.rig, sim::kLeft, p_W);
   const sim::HooverCounts h = sim::CompareSegmentations(faces, machine, kHooverMinCells);
-  truth["hoover"] = {{"truth_regions", h.truth_regions}, {"correct", h.correct},
-                     {"over", h.over},                   {"under", h.under},
-                     {"missed", h.missed},               {"noise", h.noise},
+  truth["hoover"] = {{"truth_regions", h.truth_regions},
+                     {"correct", h.correct},
+                     {"over", h.over},
+                     {"under", h.under},
+                     {"missed", h.missed},
+                     {"noise", h.noise},
                      {"min_cells", kHooverMinCells}};
 
   // Each true object against the fitted box that models it (sim::MatchBoxes).
@@ -140,8 +158,8 @@ nlohmann::json LookTruth(sim::SimRobot& robot, const task::TaskResult& r,
       m["color_name"] = colour;
       m["color_ok"] = colour == true_colour;
       spdlog::info(
-          "  {}: box {} ({}) centre {:.1f} mm, edges {:.1f} {:.1f} {:.1f} mm, yaw {:.2f} deg", obj.spec.name,
-          k, colour, 1e3 * e.center_m, 1e3 * e.edge_m.x(), 1e3 * e.edge_m.y(),
+          "  {}: box {} ({}) centre {:.1f} mm, edges {:.1f} {:.1f} {:.1f} mm, yaw {:.2f} deg",
+          obj.spec.name, k, colour, 1e3 * e.center_m, 1e3 * e.edge_m.x(), 1e3 * e.edge_m.y(),
           1e3 * e.edge_m.z(), RadToDeg(e.yaw_rad));
     } else {
       spdlog::info("  {}: no box", obj.spec.name);
@@ -259,9 +277,10 @@ nlohmann::json LookReport(const sim::Scenario& scenario, const nlohmann::json* t
       scene.unfitted, target ? std::to_string(*target) : "none", r.stages[0].wall_s,
       1e3 * (scene.segment_s + scene.model_s));
   if (scan.gaps_rescanned > 0) {
-    spdlog::info("scan: the sweep missed {} stretches of stripe positions; {} frames swept "
-                 "again, {} gaps left",
-                 scan.gaps_rescanned, scan.frames_rescanned, scan.gaps_left);
+    spdlog::info(
+        "scan: the sweep missed {} stretches of stripe positions; {} frames swept "
+        "again, {} gaps left",
+        scan.gaps_rescanned, scan.frames_rescanned, scan.gaps_left);
   }
   if (grasp_plan) {
     spdlog::info("plan: {} arm, opening {:.0f} mm, tilt {:.0f} deg, wrist-forearm {:.1f} deg",
@@ -314,19 +333,21 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   Robot robot = OpenRobot(scenario, signals.request(), CleanLockstepWires(o.lockstep));
   if (EndedAtStart(robot, scenario, &out, plan ? "plan" : "model")) return 1;
   device::RobotDevices& dev = robot.devices;
-  sim::ScanTruth scan_truth;
+  ScanTruthRecorder scan_truth(robot);
   config.sink_needs_every_image = false;  // the sink records the scan's truth only
   task::GraspTask task(&dev, robot_model, config,
                        [&](const device::StereoFrame& frame, const task::TaskView& view) {
-                         RecordScanTruth(robot.truth(), &scan_truth, frame, view);
+                         scan_truth.OnFrame(frame, view);
                        });
-  const bool ok = task.Look() && (!plan || task.Plan());
+  const bool looked = task.Look();
+  scan_truth.Stop();
+  const bool ok = looked && (!plan || task.Plan());
   const task::TaskResult& r = task.result();
   std::optional<nlohmann::json> truth;
-  if (robot.truth() != nullptr) truth = LookTruth(*robot.truth(), r, scan_truth);
+  if (robot.truth() != nullptr) truth = LookTruth(*robot.truth(), r, scan_truth.truth());
   const SafeStopReport safe = robot.LeaveSafe();
-  nlohmann::json report = LookReport(scenario, truth ? &*truth : nullptr, r, robot_model, plan,
-                                     out.staging(), o.lean);
+  nlohmann::json report =
+      LookReport(scenario, truth ? &*truth : nullptr, r, robot_model, plan, out.staging(), o.lean);
   report["ok"] = ok;
   report["failure"] = ok ? nlohmann::json(nullptr) : nlohmann::json(task::ToString(r.failure));
   report["failure_detail"] = ok ? nlohmann::json(nullptr) : nlohmann::json(r.message);
@@ -342,6 +363,7 @@ int LookAndPlan(const ModelOptions& o, bool plan) {
   if (plan && r.stages.size() > 1) timing["plan"] = r.stages[1].wall_s;
   report["timing_s"] = timing;
   WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
+  WriteTwinRecord(robot, out);
   out.Commit();
   spdlog::info("{}: total {:.2f} s; wrote {}", plan ? "plan" : "model", Seconds(t0), o.out_dir);
   if (!ok) {

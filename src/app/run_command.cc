@@ -107,7 +107,7 @@ int Run(const RunOptions& o) {
     return 1;
   }
   device::RobotDevices& dev = robot.devices;
-  sim::SimRobot* const truth = robot.truth();  // null unless every device is simulated
+  const TruthWorld* const truth = robot.truth();  // null on a real robot
   const bool sim_truth = truth != nullptr;
   const fs::path out(out_dir.staging());
 
@@ -129,7 +129,7 @@ int Run(const RunOptions& o) {
   // How far the target has moved and turned since the look: a box the hand knocked over on the
   // way in or in the close shows where it happened, whatever the task then reports.
   auto target_moved = [&]() -> nlohmann::json {
-    const Pose3 X_WO = truth->world().BodyPose(target_object->body);
+    const Pose3 X_WO = truth->world->BodyPose(target_object->body);
     const Eigen::AngleAxisd turn(X_WO_look.linear().transpose() * X_WO.linear());
     return {{"object_moved_m", (X_WO.translation() - X_WO_look.translation()).norm()},
             {"object_turned_deg", RadToDeg(turn.angle())}};
@@ -161,33 +161,35 @@ int Run(const RunOptions& o) {
       const Pose3 X_WCL = robot_model.head.X_WC(robot::HeadKinematics::kLeft, frame.head);
       const grasp::GraspPlan& plan = *task_ptr->result().plan;
       const Pose3& X_WT = view.moment == "grasp_reached" ? plan.X_WE : plan.X_WE_pre;
-      const sim::PoseError e = sim::GripperPoseError(truth->world(), plan.side, X_WCL, X_WT);
+      const sim::PoseError e = sim::GripperPoseError(*truth->world, plan.side, X_WCL, X_WT);
       nlohmann::json& at = truth_run[std::string(view.moment)];
       at = {{"gripper_to_plan_m", e.translation_m},
             {"gripper_to_plan_deg", RadToDeg(e.rotation_rad)}};
       if (target_object != nullptr) at.update(target_moved());
     }
   };
-  sim::ScanTruth scan_truth;
+  ScanTruthRecorder scan_truth(robot);
   // Only the video shows every frame; the pictures are the key moments', which always come with
   // their images: frames grabbed to wait for a move need none (the twin does not render them).
   config.sink_needs_every_image = video.isOpened();
   task::GraspTask task(&dev, robot_model, config,
                        [&](const device::StereoFrame& frame, const task::TaskView& view) {
-                         RecordScanTruth(truth, &scan_truth, frame, view);
+                         scan_truth.OnFrame(frame, view);
                          sink(frame, view);
                        });
   task_ptr = &task;
   // The truth of the look and the plan is taken before anything touches the objects, and so is
   // the target object's true height (truth only).
   std::optional<nlohmann::json> look_truth;
-  const bool planned = task.Look() && task.Plan();
+  const bool looked = task.Look();
+  scan_truth.Stop();
+  const bool planned = looked && task.Plan();
   if (sim_truth) {
-    look_truth = LookTruth(*truth, task.result(), scan_truth);
+    look_truth = LookTruth(*truth, task.result(), scan_truth.truth());
     if (task.result().target) {
       target_object =
-          TargetObject(truth->world(), task.result().scene->boxes[*task.result().target]);
-      if (target_object != nullptr) X_WO_look = truth->world().BodyPose(target_object->body);
+          TargetObject(*truth->world, task.result().scene->boxes[*task.result().target]);
+      if (target_object != nullptr) X_WO_look = truth->world->BodyPose(target_object->body);
     }
   }
   // The close, and (truth only) where the target is after it.
@@ -277,7 +279,7 @@ int Run(const RunOptions& o) {
   report["wall_time_s"] = r.wall_s;
   if (sim_truth) {
     if (target_object != nullptr) {
-      const double rise = truth->world().BodyPose(target_object->body).translation().z() -
+      const double rise = truth->world->BodyPose(target_object->body).translation().z() -
                           X_WO_look.translation().z();
       truth_run["object"] = target_object->spec.name;
       truth_run["object_rise_m"] = rise;
@@ -286,10 +288,7 @@ int Run(const RunOptions& o) {
   }
   if (video.isOpened()) video.release();
   WriteFileWhole(out_dir.Path("report.json"), report.dump(2) + "\n");
-  if (robot.lockstep) {
-    // The twin's account: truth, exposures, every command its emulators executed.
-    WriteFileWhole(out_dir.Path("twin.json"), robot.lockstep->Report().dump(1) + "\n");
-  }
+  WriteTwinRecord(robot, out_dir);
   out_dir.Commit();
 
   std::string servo;

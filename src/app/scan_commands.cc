@@ -54,8 +54,7 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   scan::SweepConfig sweep;
   sweep.stop = signals.request();
   std::string aim_failed;
-  const device::Status aimed =
-      scan::MoveHeadForScan(dev, scan::kLookHead, sweep.stop, &aim_failed);
+  const device::Status aimed = scan::MoveHeadForScan(dev, scan::kLookHead, sweep.stop, &aim_failed);
   if (aimed != device::Status::kOk) {
     report.status = aimed;
     report.failed_device = aim_failed;
@@ -93,7 +92,8 @@ int CalibrateLaser(const CalibrateLaserOptions& o) {
   const std::int32_t lo = std::min(sweep.start_count, sweep.end_count);
   const std::int32_t hi = std::max(sweep.start_count, sweep.end_count);
   const sim::LaserPlaneError error = sim::CompareLaserPlanes(
-      robot.truth()->rig(), [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, lo, hi);
+      *robot.truth()->rig, [&](std::int32_t c) { return cal.PlaneH(c).TransformedBy(X_WH); }, lo,
+      hi);
   spdlog::info(
       "calibrate laser: against the simulator's planes over counts {}..{}: worst {:.4f} deg, "
       "{:.3f} mm",
@@ -118,8 +118,7 @@ int Scan(const ScanOptions& o) {
   sweep.stop = signals.request();
   const auto t_scan = std::chrono::steady_clock::now();
   std::string aim_failed;
-  const device::Status aimed =
-      scan::MoveHeadForScan(dev, scan::kLookHead, sweep.stop, &aim_failed);
+  const device::Status aimed = scan::MoveHeadForScan(dev, scan::kLookHead, sweep.stop, &aim_failed);
   scan::ScanResult result;
   if (aimed == device::Status::kOk) {
     result = scanner.Scan(dev, sweep);
@@ -134,10 +133,10 @@ int Scan(const ScanOptions& o) {
     // no range to write.
     const bool interrupted = result.status == device::Status::kInterrupted;
     const std::string failure = interrupted ? "interrupted" : "device_error";
-    const std::string detail =
-        interrupted ? signals.request()->Reason() + " during the scan"
-                    : result.failed_device + ": " + std::string(device::ToString(result.status)) +
-                          " during the scan";
+    const std::string detail = interrupted ? signals.request()->Reason() + " during the scan"
+                                           : result.failed_device + ": " +
+                                                 std::string(device::ToString(result.status)) +
+                                                 " during the scan";
     nlohmann::json report = {{"scenario", scenario.name},
                              {"seed", scenario.seed},
                              {"ok", false},
@@ -148,6 +147,7 @@ int Scan(const ScanOptions& o) {
                              {"safe_stop", safe.Json()},
                              {"timing_s", {{"scan", scan_s}, {"total", Seconds(t0)}}}};
     WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
+    WriteTwinRecord(robot, out);
     out.Commit();
     spdlog::error("scan: {}: {}; wrote {}", failure, detail, o.out_dir);
     return 1;
@@ -174,9 +174,9 @@ int Scan(const ScanOptions& o) {
   report["timing_s"] = {{"scan", scan_s}, {"total", Seconds(t0)}};
   report["safe_stop"] = safe.Json();
   std::string truth_line;
-  if (sim::SimRobot* twin = robot.truth()) {
-    // Ground truth (only when every device is the twin's: then what the devices saw is the
-    // sim's): how far the accepted points lie from the true surfaces.
+  if (const TruthWorld* twin = robot.truth()) {
+    // Ground truth (only when every device is the twin's, simulated or in lockstep: then what
+    // the devices saw is the twin's): how far the accepted points lie from the true surfaces.
     double sum2 = 0;
     int n = 0, beyond_5mm = 0;
     std::vector<double> errors;
@@ -184,7 +184,7 @@ int Scan(const ScanOptions& o) {
       for (int c = 0; c < result.range.cols(); ++c) {
         const scan::RangeCell& cell = result.range.at(r, c);
         if (!cell.valid) continue;
-        const double e = sim::DistanceToTrueSurface(twin->world(), cell.p_W);
+        const double e = sim::DistanceToTrueSurface(*twin->world, cell.p_W);
         sum2 += e * e, ++n;
         beyond_5mm += e > 0.005;
         errors.push_back(e);
@@ -195,7 +195,7 @@ int Scan(const ScanOptions& o) {
       return errors.empty() ? 0.0 : errors[static_cast<size_t>(q * (errors.size() - 1))];
     };
     const double rms = n > 0 ? std::sqrt(sum2 / n) : 0.0;
-    nlohmann::json truth = sim::TruthJson(twin->world(), twin->rig(), {});
+    nlohmann::json truth = sim::TruthJson(*twin->world, *twin->rig, {});
     truth["range"] = {{"rms_to_surface_m", rms},
                       {"median_to_surface_m", percentile(0.5)},
                       {"p99_to_surface_m", percentile(0.99)},
@@ -213,13 +213,15 @@ int Scan(const ScanOptions& o) {
     scan::WriteRangePng(result.range, out.Path("range.png"));
   }
   WriteFileWhole(out.Path("report.json"), report.dump(2) + "\n");
+  WriteTwinRecord(robot, out);
   out.Commit();
   spdlog::info("scan: {} points, {} rejected rows{}; scan {:.2f} s, total {:.2f} s; wrote {}",
                result.points, result.rejected, truth_line, scan_s, Seconds(t0), o.out_dir);
   if (result.gaps_rescanned > 0) {
-    spdlog::info("scan: the sweep missed {} stretches of stripe positions; {} frames swept "
-                 "again, {} gaps left",
-                 result.gaps_rescanned, result.frames_rescanned, result.gaps_left);
+    spdlog::info(
+        "scan: the sweep missed {} stretches of stripe positions; {} frames swept "
+        "again, {} gaps left",
+        result.gaps_rescanned, result.frames_rescanned, result.gaps_left);
   }
   if (!seen) {
     spdlog::error("scan: no_stripe: {}", report["failure_detail"].get<std::string>());

@@ -2,7 +2,8 @@
 // SensorHand, laser board) and the twin's cameras, against the twin in simulated time in one
 // process. Run twice: the same command logs byte for byte, the same twin record and the same
 // report (wall-clock timings aside), whatever else the machine is doing; and by the twin's
-// truth the gripper was where the plan put it when the hand closed, and the box rose.
+// truth the gripper was where the plan put it when the hand closed, and the box rose; the
+// report's truth block is the twin's.
 // And the right arm's link cut both ways during the servo, at a twin time (--at): the run ends
 // with device_error naming arm_right within 0.5 s of twin time, exit 1, the laser and the LEDs
 // off; no ABORT can reach the controller, which finishes the motion it was running and stops.
@@ -59,7 +60,26 @@ TEST(CliLockstep, TheWholeGraspThroughTheRealDriversTwiceTheSame) {
   const json& report = reports[0];
   const json& twin = twins[0];
   EXPECT_TRUE(report["result"].value("lifted", false));
-  EXPECT_FALSE(report.contains("truth"));  // real drivers: the run knows no truth
+  // The report's truth is the twin's (the run's truth rig on the twin's world, its stripe from
+  // the twin's renders), as a simulated run's is the simulated robot's: the scan against the
+  // true surfaces and stripe, each box found, and the target's rise as twin.json has it.
+  ASSERT_TRUE(report.contains("truth"));
+  const json& truth = report["truth"];
+  EXPECT_LT(truth["range"].value("rms_to_surface_m", 1.0), 0.0015) << truth["range"].dump();
+  EXPECT_GT(truth["range"].value("coverage", 0.0), 0.95) << truth["range"].dump();
+  EXPECT_GT(truth["range"].value("truth_stripe_points", 0), 50000) << truth["range"].dump();
+  ASSERT_EQ(truth["boxes"].size(), 2u);
+  for (const json& b : truth["boxes"]) {
+    EXPECT_TRUE(b.value("found", false)) << b.dump();
+    EXPECT_LT(b.value("center_error_m", 1.0), 0.003) << b.dump();
+    EXPECT_TRUE(b.value("color_ok", false)) << b.dump();
+  }
+  const std::string object = truth["run"].value("object", "");
+  double twin_rise = -1.0;
+  for (const json& b : twin["truth"]["boxes"]) {
+    if (b["name"] == object) twin_rise = b["rise_m"].get<double>();
+  }
+  EXPECT_NEAR(truth["run"].value("object_rise_m", 0.0), twin_rise, 1e-4) << object;
   EXPECT_TRUE(twin.value("lockstep", false));
   EXPECT_EQ(twin["frames"].value("overruns", -1), 0);
   // Every serial device was driven through its wire.

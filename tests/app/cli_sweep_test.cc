@@ -3,11 +3,10 @@
 // baseline that catches a figure made worse on purpose.
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <chrono>
 #include <filesystem>
@@ -38,9 +37,7 @@ json Read(const fs::path& p) {
   return json::parse(in);
 }
 
-void Write(const fs::path& p, const std::string& text) {
-  std::ofstream(p) << text;
-}
+void Write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
 std::string Root() { return HGRASP_ROOT_DIR; }
 
@@ -73,17 +70,17 @@ TEST(CliSweep, ACrashAHangAndABadFileEachGiveTheirRowAndTheSweepFinishes) {
   // The scenes run through a wrapper that crashes on one scene and hangs on another, as a bug
   // in hgrasp or a device would; the rest it hands to hgrasp unchanged.
   const fs::path wrapper = dir / "faulty_hgrasp.sh";
-  Write(wrapper, "#!/bin/sh\ncase \"$2\" in\n  */crash.yaml) kill -SEGV $$ ;;\n"
-                 "  */hang.yaml) sleep 600 ;;\nesac\nexec " +
-                     std::string(HGRASP_BINARY) + " \"$@\"\n");
+  Write(wrapper,
+        "#!/bin/sh\ncase \"$2\" in\n  */crash.yaml) kill -SEGV $$ ;;\n"
+        "  */hang.yaml) sleep 600 ;;\nesac\nexec " +
+            std::string(HGRASP_BINARY) + " \"$@\"\n");
   fs::permissions(wrapper, fs::perms::owner_all);
   const fs::path out = dir / "out";
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = RunHgrasp("sweep " + scenes.string() + " --stage model --jobs 2 --time-limit 20" +
                                " --hgrasp " + wrapper.string() + " --out " + out.string(),
                            180);
-  const double took =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_EQ(r.status, 0) << r.output;
   const json summary = Read(out / "summary.json");
   ASSERT_EQ(summary["scenes"].size(), 4u) << r.output;
@@ -122,8 +119,10 @@ TEST(CliSweep, ACrashAHangAndABadFileEachGiveTheirRowAndTheSweepFinishes) {
         "suite = next(iter(xml))\n"
         "assert suite.tests == 4 and suite.errors == 3 and suite.failures == 0, suite\n"
         "print('junit ok')\n");
-  EXPECT_EQ(std::system(("/usr/bin/python3 " + check.string() + " " + (out / "junit.xml").string()).c_str()),
-            0);
+  EXPECT_EQ(
+      std::system(
+          ("/usr/bin/python3 " + check.string() + " " + (out / "junit.xml").string()).c_str()),
+      0);
   // The CSV: a header, a line per scene, a line per true box of the good scene.
   std::ifstream csv(out / "summary.csv");
   int scene_lines = 0, box_lines = 0;
@@ -141,9 +140,8 @@ TEST(CliSweep, TheSameSeedsGiveTheSameFiguresTwice) {
   json first;
   for (int i = 0; i < 2; ++i) {
     const fs::path out = dir / ("out" + std::to_string(i));
-    const auto r = RunHgrasp("sweep --family random_boxes --seeds 3..4 --stage run --jobs 2 --out " +
-                                 out.string(),
-                             300);
+    const auto r = RunHgrasp(
+        "sweep --family random_boxes --seeds 3..4 --stage run --jobs 2 --out " + out.string(), 300);
     ASSERT_EQ(r.status, 0) << r.output;
     const json summary = Read(out / "summary.json");
     ASSERT_EQ(summary["scenes"].size(), 2u);
@@ -180,9 +178,8 @@ pid_t Start(const std::vector<std::string>& args, const fs::path& log) {
 TEST(CliSweep, CtrlCKeepsWhatFinishedAndTheSameCommandResumes) {
   const fs::path dir = Fresh("resume");
   const fs::path out = dir / "out";
-  const std::vector<std::string> args = {"sweep",   "--family", "random_boxes", "--seeds",
-                                         "1..4",    "--stage",  "model",        "--out",
-                                         out.string()};
+  const std::vector<std::string> args = {"sweep",   "--family", "random_boxes", "--seeds",   "1..4",
+                                         "--stage", "model",    "--out",        out.string()};
   const pid_t pid = Start(args, dir / "first.log");
   // Once the first scene has its row, Ctrl-C.
   const auto t0 = std::chrono::steady_clock::now();
@@ -222,9 +219,8 @@ TEST(CliSweep, CtrlCKeepsWhatFinishedAndTheSameCommandResumes) {
   EXPECT_EQ(summary["totals"]["scenes_run"], 4 - static_cast<int>(kept));
 
   // Another sweep does not mix into the folder.
-  const auto other = RunHgrasp("sweep --family random_boxes --seeds 1..4 --stage plan --out " +
-                                   out.string(),
-                               30);
+  const auto other =
+      RunHgrasp("sweep --family random_boxes --seeds 1..4 --stage plan --out " + out.string(), 30);
   EXPECT_EQ(other.status, 2) << other.output;
   EXPECT_NE(other.output.find("holds another sweep (its stage differs)"), std::string::npos)
       << other.output;
@@ -235,8 +231,8 @@ TEST(CliSweep, ABaselineCatchesAFigureMadeWorseOnPurpose) {
   const fs::path dir = Fresh("baseline");
   const fs::path baseline = dir / "baseline.json";
   const std::string scenes = " " + Root() + "/scenarios/default.yaml --stage model";
-  auto r = RunHgrasp("sweep" + scenes + " --out " + (dir / "good").string() +
-                         " --write-baseline " + baseline.string(),
+  auto r = RunHgrasp("sweep" + scenes + " --out " + (dir / "good").string() + " --write-baseline " +
+                         baseline.string(),
                      120);
   ASSERT_EQ(r.status, 0) << r.output;
   // The same scenes against their own baseline: no regression.
@@ -262,8 +258,7 @@ TEST(CliSweep, ABaselineCatchesAFigureMadeWorseOnPurpose) {
                     (dir / "worse").string() + " --baseline " + baseline.string(),
                 120);
   EXPECT_EQ(r.status, 1) << r.output;
-  EXPECT_NE(r.output.find("REGRESSION default: "), std::string::npos)
-      << r.output;
+  EXPECT_NE(r.output.find("REGRESSION default: "), std::string::npos) << r.output;
   const json regressions = Read(dir / "worse" / "regressions.json");
   ASSERT_GE(regressions["regressions"].size(), 1u);
   EXPECT_EQ(regressions["regressions"][0]["scene"], "default");
@@ -277,12 +272,46 @@ TEST(CliSweep, ABaselineCatchesAFigureMadeWorseOnPurpose) {
   fs::remove_all(dir);
 }
 
+// `--lockstep`: each scene through the real drivers against the twin in simulated time, scored
+// against the twin's truth, and within the baseline of the same scene on simulated devices (the
+// two runs' figures differ by the scan's own repeatability). A folder of one kind does not
+// resume as the other.
+TEST(CliSweep, ALockstepSweepIsScoredByTheTwinsTruthWithinTheSimulatedBaseline) {
+  const fs::path dir = Fresh("lockstep");
+  const fs::path baseline = dir / "baseline.json";
+  const std::string scenes = " " + Root() + "/scenarios/default.yaml --stage model";
+  auto r = RunHgrasp("sweep" + scenes + " --out " + (dir / "sim").string() + " --write-baseline " +
+                         baseline.string(),
+                     120);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const fs::path out = dir / "lockstep";
+  r = RunHgrasp(
+      "sweep" + scenes + " --lockstep --out " + out.string() + " --baseline " + baseline.string(),
+      300);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("0 regressions"), std::string::npos) << r.output;
+  const json summary = Read(out / "summary.json");
+  EXPECT_TRUE(summary["sweep"].value("lockstep", false));
+  EXPECT_TRUE(fs::exists(out / "scenes" / "default" / "twin.json"));  // the twin ran it
+  const json row = RowOf(summary, "default");
+  EXPECT_TRUE(row.value("ok", false)) << row.dump();
+  EXPECT_TRUE(row["range"].is_object()) << row.dump();
+  EXPECT_GT(row["range"].value("coverage", 0.0), 0.95) << row.dump();
+  EXPECT_TRUE(row["hoover"].is_object()) << row.dump();
+  EXPECT_EQ(row.value("boxes_found", 0), 2) << row.dump();
+  for (const json& b : row["boxes"]) EXPECT_TRUE(b.value("within_tolerance", false)) << b.dump();
+  // The same folder without --lockstep is another sweep.
+  r = RunHgrasp("sweep" + scenes + " --out " + out.string(), 60);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("its lockstep differs"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
 TEST(CliSweep, APreparedSweepRunsAsShardsAndMerges) {
   const fs::path dir = Fresh("shards");
   const std::string out = (dir / "out").string();
   // --seeds alone: the family random_boxes.
-  auto r = RunHgrasp("sweep --seeds 1..3 --stage scan --prepare --out " + out,
-                     30);
+  auto r = RunHgrasp("sweep --seeds 1..3 --stage scan --prepare --out " + out, 30);
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(dir / "out" / "sweep.json"));
   EXPECT_FALSE(fs::exists(dir / "out" / "rows"));  // nothing ran

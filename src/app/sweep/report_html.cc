@@ -174,7 +174,9 @@ function renderHeader() {
   document.title = 'hgrasp sweep: ' + show(sw.stage) + ', ' + n + ' scenes, ' + show(sw.started_utc);
   $('title').textContent = 'hgrasp sweep \u2013 ' + show(sw.stage);
   $('meta').innerHTML = [
-    ['stage', show(sw.stage)], ['scenes', show(n)], ['started', show(sw.started_utc)],
+    ['stage', show(sw.stage)],
+    ['devices', sw.lockstep ? 'real drivers, twin in lockstep' : 'simulated'],
+    ['scenes', show(n)], ['started', show(sw.started_utc)],
     ['jobs', show(sw.jobs)], ['time limit s', show(sw.time_limit_s)],
     ['sweep wall s', show(t.sweep_wall_s)], ['scene wall s (sum)', show(t.wall_s)],
   ].map(([k, v]) => esc(k) + ' <strong>' + esc(v) + '</strong>').join(' &middot; ');
@@ -523,10 +525,17 @@ std::string ScriptSafeJson(const json& j) {
   out.reserve(raw.size() + raw.size() / 16);
   for (const char c : raw) {
     switch (c) {
-      case '<': out += "\\u003c"; break;
-      case '>': out += "\\u003e"; break;
-      case '&': out += "\\u0026"; break;
-      default: out += c;
+      case '<':
+        out += "\\u003c";
+        break;
+      case '>':
+        out += "\\u003e";
+        break;
+      case '&':
+        out += "\\u0026";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -552,8 +561,8 @@ json SceneThumbnails(const json& scene, const fs::path& sweep_dir) {
   const auto add_field = [&](const std::string& key, const json& value) {
     if (value.is_array()) {
       for (const json& p : value) {
-        if (p.is_string()) AddThumbnail(fs::path(p.get<std::string>()).stem().string(), p,
-                                        sweep_dir, &thumbs);
+        if (p.is_string())
+          AddThumbnail(fs::path(p.get<std::string>()).stem().string(), p, sweep_dir, &thumbs);
       }
     } else {
       AddThumbnail(key, value, sweep_dir, &thumbs);
@@ -578,8 +587,8 @@ std::string Base64(std::string_view bytes) {
   out.reserve((bytes.size() + 2) / 3 * 4);
   size_t i = 0;
   for (; i + 3 <= bytes.size(); i += 3) {
-    const uint32_t v = (uint32_t(uint8_t(bytes[i])) << 16) | (uint32_t(uint8_t(bytes[i + 1])) << 8) |
-                       uint32_t(uint8_t(bytes[i + 2]));
+    const uint32_t v = (uint32_t(uint8_t(bytes[i])) << 16) |
+                       (uint32_t(uint8_t(bytes[i + 1])) << 8) | uint32_t(uint8_t(bytes[i + 2]));
     out += kAlphabet[(v >> 18) & 63];
     out += kAlphabet[(v >> 12) & 63];
     out += kAlphabet[(v >> 6) & 63];

@@ -3,7 +3,8 @@
 //
 // The sweep's folder DIR holds everything, so a stopped sweep resumes from it and Slurm's array
 // tasks share it:
-//   DIR/sweep.json          the manifest: stage, scenes (name and file), calibration files
+//   DIR/sweep.json          the manifest: stage, lockstep, scenes (name and file), calibration
+//                           files
 //   DIR/scenarios/          the scenario files of generated scenes (--family, --seeds)
 //   DIR/scenes/<scene>/     each scene's outputs (report.json, pictures)
 //   DIR/logs/<scene>.log    each scene's output
@@ -147,6 +148,7 @@ json Manifest(const SweepOptions& o, const std::vector<SceneEntry>& scenes,
   for (const SceneEntry& s : scenes) list.push_back({{"scene", s.scene}, {"file", s.file}});
   return {{"hgrasp_sweep", 1},
           {"stage", o.stage},
+          {"lockstep", o.lockstep},
           {"time_limit_s", o.time_limit_s},
           {"hgrasp", program},
           {"calibration",
@@ -189,7 +191,10 @@ std::vector<json> LoadRows(const fs::path& dir, const std::vector<SceneEntry>& s
 class Progress {
  public:
   Progress(int total, int done_before)
-      : total_(total), done_(done_before), before_(done_before), tty_(isatty(2) == 1),
+      : total_(total),
+        done_(done_before),
+        before_(done_before),
+        tty_(isatty(2) == 1),
         start_(Clock::now()) {}
 
   void Finished(const json& row) {
@@ -201,8 +206,8 @@ class Progress {
     }
     const std::string what = row["ok"].get<bool>() ? "ok" : row["failure"].get<std::string>();
     std::fprintf(stderr, "sweep: [%d/%d] %s: %s (%.1f s); %d failed; %s\n", done_, total_,
-                 row["scene"].get<std::string>().c_str(), what.c_str(),
-                 row.value("wall_s", 0.0), failed_, Rate().c_str());
+                 row["scene"].get<std::string>().c_str(), what.c_str(), row.value("wall_s", 0.0),
+                 failed_, Rate().c_str());
   }
   void Tick() {
     if (tty_ && Since(last_draw_) > 0.5) Draw();
@@ -217,15 +222,15 @@ class Progress {
     const int ran = done_ - before_;
     if (ran == 0 || s <= 0) return "rate ?";
     const double per_hour = 3600.0 * ran / s;
-    return fmt::format("{:.0f} scenes/h, {} left", per_hour,
-                       Duration((total_ - done_) * s / ran));
+    return fmt::format("{:.0f} scenes/h, {} left", per_hour, Duration((total_ - done_) * s / ran));
   }
   void Draw() {
     last_draw_ = Clock::now();
     constexpr int kWidth = 30;
     const int fill = total_ > 0 ? kWidth * done_ / total_ : kWidth;
-    std::fprintf(stderr, "\r\x1b[Ksweep [%s%s] %d/%d, %d failed, %s", std::string(fill, '#').c_str(),
-                 std::string(kWidth - fill, '.').c_str(), done_, total_, failed_, Rate().c_str());
+    std::fprintf(stderr, "\r\x1b[Ksweep [%s%s] %d/%d, %d failed, %s",
+                 std::string(fill, '#').c_str(), std::string(kWidth - fill, '.').c_str(), done_,
+                 total_, failed_, Rate().c_str());
     std::fflush(stderr);
   }
 
@@ -241,6 +246,7 @@ std::vector<std::string> SceneCommand(const json& manifest, const SceneEntry& s,
   std::vector<std::string> argv = {manifest["hgrasp"].get<std::string>(), stage, s.file, "--out",
                                    scene_dir.string()};
   argv.push_back("--lean");
+  if (manifest.value("lockstep", false)) argv.push_back("--lockstep");
   const json& cal = manifest["calibration"];
   const CalibrationFiles defaults;
   const auto pass = [&](const char* key, const char* option, const std::string& fallback) {
@@ -342,6 +348,7 @@ int WriteOutputs(const fs::path& dir, const json& manifest, const RunStats* stat
     baseline = *b;
   }
   json info = {{"stage", stage},
+               {"lockstep", manifest.value("lockstep", false)},
                {"scenes", scenes.size()},
                {"complete", complete},
                {"jobs", jobs > 0 ? json(jobs) : json()},
@@ -355,15 +362,14 @@ int WriteOutputs(const fs::path& dir, const json& manifest, const RunStats* stat
   json& totals = summary["totals"];
   totals["sweep_wall_s"] = stats ? json(stats->wall_s) : json();
   totals["scenes_run"] = stats ? json(stats->ran) : json();
-  totals["scenes_per_hour"] =
-      stats && stats->ran > 0 && stats->wall_s > 0 ? json(3600.0 * stats->ran / stats->wall_s)
-                                                   : json();
+  totals["scenes_per_hour"] = stats && stats->ran > 0 && stats->wall_s > 0
+                                  ? json(3600.0 * stats->ran / stats->wall_s)
+                                  : json();
   int status = complete ? 0 : 1;
   if (baseline) {
     const sweep::Comparison c = sweep::CompareWithBaseline(*baseline, rows);
-    summary["baseline"] = {{"file", baseline_path},
-                           {"regressions", c.regressions.size()},
-                           {"notes", c.notes}};
+    summary["baseline"] = {
+        {"file", baseline_path}, {"regressions", c.regressions.size()}, {"notes", c.notes}};
     WriteFileWhole((dir / "regressions.json").string(), c.Json().dump(2) + "\n");
     for (const std::string& n : c.notes) std::fprintf(stderr, "sweep: baseline: %s\n", n.c_str());
     for (const sweep::Regression& g : c.regressions) {
@@ -391,11 +397,10 @@ int WriteOutputs(const fs::path& dir, const json& manifest, const RunStats* stat
                "sweep: %zu of %zu scenes%s: %d ok, %d failed%s%s; boxes %d found of %d, %d within "
                "tolerance; %d lifted; wrote %s\n",
                rows.size(), scenes.size(), complete ? "" : " (not complete)",
-               totals["ok"].get<int>(), totals["failed"].get<int>(),
-               failures.empty() ? "" : " (", failures.empty() ? "" : (failures + ")").c_str(),
-               totals["boxes_found"].get<int>(), totals["boxes"].get<int>(),
-               totals["boxes_within_tolerance"].get<int>(), totals["lifted"].get<int>(),
-               (dir / "report.html").c_str());
+               totals["ok"].get<int>(), totals["failed"].get<int>(), failures.empty() ? "" : " (",
+               failures.empty() ? "" : (failures + ")").c_str(), totals["boxes_found"].get<int>(),
+               totals["boxes"].get<int>(), totals["boxes_within_tolerance"].get<int>(),
+               totals["lifted"].get<int>(), (dir / "report.html").c_str());
   return status;
 }
 
@@ -544,13 +549,15 @@ int Sweep(const SweepOptions& o) {
     if (fs::exists(dir / "sweep.json")) {
       // The same sweep resumes; another one does not mix into this folder.
       const json old = ReadManifest(dir);
-      for (const char* key : {"stage", "scenes", "calibration"}) {
-        if (old[key] != manifest[key]) {
+      // (A manifest written before --lockstep has no such key: it ran on simulated devices.)
+      for (const char* key : {"stage", "lockstep", "scenes", "calibration"}) {
+        if (old.value(key, json(false)) != manifest.value(key, json(false))) {
           throw InputError(
               "", "--out", o.out_dir,
-              fmt::format("the folder of this sweep, or a new one: it holds another sweep (its {} "
-                          "differ{}); remove it or choose another --out",
-                          key, std::string(key) == "stage" ? "s" : ""));
+              fmt::format(
+                  "the folder of this sweep, or a new one: it holds another sweep (its {} "
+                  "differ{}); remove it or choose another --out",
+                  key, std::string(key) == "stage" || std::string(key) == "lockstep" ? "s" : ""));
         }
       }
       manifest["started_utc"] = old.value("started_utc", UtcNow());
