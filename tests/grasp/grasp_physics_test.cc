@@ -21,7 +21,7 @@ namespace hgrasp::grasp {
 namespace {
 
 // Lets simulated time run (a frame is 40 ms) until the arm and hand of `side` are still, or
-// until `max_s` has passed.
+// until `max_s` has passed. Nothing looks at these frames: the simulator renders none.
 void Settle(device::RobotDevices& dev, device::Side side, double max_s) {
   device::StereoFrame frame;
   for (double t = 0; t < max_s; t += 0.04) {
@@ -30,7 +30,7 @@ void Settle(device::RobotDevices& dev, device::Side side, double max_s) {
     EXPECT_OK(dev.ArmOf(side).Read(&a));
     EXPECT_OK(dev.HandOf(side).Read(&h));
     if (!a.moving && !h.moving && t > 0.2) return;
-    EXPECT_OK(dev.cameras->Grab(&frame));
+    EXPECT_OK(dev.cameras->GrabWithoutImages(&frame));
   }
 }
 

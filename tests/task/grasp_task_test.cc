@@ -5,7 +5,6 @@
 #include <memory>
 
 #include "common/paths.h"
-#include "sim/random_scene.h"
 #include "tests/task/task_sim_util.h"
 #include "tests/task/timing_out_laser.h"
 
@@ -17,7 +16,7 @@ using testing::RunInSim;
 
 TEST(GraspTaskSim, DefaultScenarioIsGraspedAndTheSameSeedGivesTheSameRun) {
   const sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
-  const testing::SimOutcome a = RunInSim(scenario);
+  const testing::SimOutcome a = RunInSim(scenario, {}, {}, /*every_image=*/true);
   Print("default", a);
   EXPECT_TRUE(a.Success()) << a.result.message;
   EXPECT_GT(a.result.gripper_rise_m, 0.8 * scenario.task->lift_m);
@@ -92,14 +91,14 @@ TEST(GraspTaskSim, FramesOfTheWaitsComeWithoutImagesUnlessTheSinkNeedsEveryImage
 TEST(GraspTaskSim, ABoxTheFingersSlideAlongIsGraspSlippedNotLifted) {
   sim::Scenario scenario = sim::LoadScenario(ResolveDataPath("scenarios/default.yaml"));
   scenario.objects[0].mass = sim::kMaxMass;
-  const testing::SimOutcome a = RunInSim(scenario, {}, {}, false,
-                                         [](TaskConfig* c) { c->grip_force_n = 1.0; });
+  const testing::SimOutcome a =
+      RunInSim(scenario, {}, {}, false, [](TaskConfig* c) { c->grip_force_n = 1.0; });
   Print("slides", a);
   EXPECT_EQ(a.result.failure, Failure::kGraspSlipped) << a.result.message;
   EXPECT_FALSE(a.result.lifted);
-  EXPECT_LT(a.rise_m, 0.045);                    // truth: the box stayed low
-  EXPECT_GT(a.result.gripper_rise_m, 0.045);     // the gripper did not
-  EXPECT_GT(a.result.held_opening_m, 0.01);      // and the fingers still held the box
+  EXPECT_LT(a.rise_m, 0.045);                 // truth: the box stayed low
+  EXPECT_GT(a.result.gripper_rise_m, 0.045);  // the gripper did not
+  EXPECT_GT(a.result.held_opening_m, 0.01);   // and the fingers still held the box
   ASSERT_TRUE(a.result.box_rise);
   EXPECT_LT(a.result.box_rise->min_m, 0.045);
   EXPECT_LE(a.result.box_rise->min_m, a.rise_m + 0.002);
@@ -248,39 +247,6 @@ TEST(GraspTaskSim, ABoxSeenShortOfTheLiftIsRaisedByWhatItLacks) {
       EXPECT_TRUE(lifted) << r.message;
     }
   }
-}
-
-// Issue 7's acceptance: over 20 seeded random scenes whose target the open hand can span, the
-// servo brings the gripper within 5 mm and 2 deg of the planned grasp and the box comes up by
-// task.lift and stays up for 2 s, in at least 95% of them (by the truth). Issue 19: no run says
-// lifted when the box rose under 45 mm; the cameras confirm the lift in most (a box the hand
-// and the forearm hide from the head is reported grasp_slipped: seeds 3 and 26, where not one
-// of its cells is seen after the lift).
-TEST(GraspTaskSim, RandomScenes) {
-  const int scenes = 20;
-  int good = 0, tried = 0, confirmed = 0, false_lifts = 0;
-  for (int seed = 1, n = 0; n < scenes; ++seed) {
-    const sim::Scenario scenario = sim::RandomBoxScene(seed);
-    ++tried;
-    const Eigen::Vector3d& size = scenario.objects[0].size_O;
-    if (std::min(size.x(), size.y()) + 2 * grasp::GraspConfig{}.clearance_m >
-        grasp::HandGeometry{}.max_opening_m) {
-      continue;
-    }
-    ++n;
-    const testing::SimOutcome o = RunInSim(scenario);
-    Print("seed " + std::to_string(seed), o);
-    good += o.TrulyGrasped();
-    confirmed += o.Success();
-    false_lifts += o.FalselyLifted(scenario.task->lift_m);
-  }
-  std::printf(
-      "%d of %d scenes (seeds 1-%d) within 5 mm / 2 deg and held by truth; the cameras confirmed "
-      "%d; %d said lifted falsely\n",
-      good, scenes, tried, confirmed, false_lifts);
-  EXPECT_GE(good, 0.95 * scenes);
-  EXPECT_EQ(false_lifts, 0);
-  EXPECT_GE(confirmed, 0.75 * scenes);
 }
 
 }  // namespace
