@@ -287,14 +287,32 @@ double Val2Arm::Progress(const Motion& motion, const val2::WhereReport& report,
   const Pose3 X_BE = val2::TransToPose(report.location);
   const Eigen::Vector3d step_mm = 1e3 * motion.X_EEnew.translation();
   if (step_mm.norm() >= 2.0 * opt_.moved_mm) {
-    const Eigen::Vector3d travel_mm = 1e3 * X_BE0.linear().transpose() *
-                                      (X_BE.translation() - X_BE0.translation());
+    const Eigen::Vector3d travel_mm =
+        1e3 * X_BE0.linear().transpose() * (X_BE.translation() - X_BE0.translation());
     return travel_mm.dot(step_mm.normalized()) / opt_.moved_mm;
   }
   const Eigen::AngleAxisd want(motion.X_EEnew.rotation());
   const Eigen::AngleAxisd turned(X_BE0.linear().transpose() * X_BE.linear());
   if (want.angle() <= 0.0) return 0.0;
   return RadToDeg(turned.angle() * turned.axis().dot(want.axis())) / opt_.moved_turn_deg;
+}
+
+double Val2Arm::WholeProgress(const Motion& motion) const {
+  if (motion.joints_deg) {
+    double length = 0.0;
+    for (int k = 0; k < 6; ++k) length += std::pow((*motion.joints_deg)[k] - prev_deg_[k], 2);
+    return std::sqrt(length) / opt_.moved_deg;
+  }
+  const double step_m = motion.X_EEnew.translation().norm();
+  const double turn_rad = Eigen::AngleAxisd(motion.X_EEnew.rotation()).angle();
+  if (!located_) {
+    // Joint travel in any direction: the tool cannot go step_m, nor turn turn_rad, unless the
+    // joints turn by step_m / reach_m, and turn_rad, in all (Euclidean norm: / sqrt(6)).
+    const double joints_rad = std::max(step_m / opt_.reach_m, turn_rad) / std::sqrt(6.0);
+    return RadToDeg(joints_rad) / opt_.moved_deg;
+  }
+  if (1e3 * step_m >= 2.0 * opt_.moved_mm) return 1e3 * step_m / opt_.moved_mm;
+  return RadToDeg(turn_rad) / opt_.moved_turn_deg;
 }
 
 Status Val2Arm::SetSpeed(double fraction) {
@@ -401,8 +419,8 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
   bool verified = false;  // a ^R answer showed exactly the line
   // While armed: traces of a cancel, of an execution and of a message, in answers since.
   bool cancel_trace = false, execution_trace = false, message_trace = false;
-  int suspect = 0;  // ^R answers near the line but not it, in a row
-  int errors = 0;   // lines that ran with "not understood"
+  int suspect = 0;         // ^R answers near the line but not it, in a row
+  int errors = 0;          // lines that ran with "not understood"
   bool gone_once = false;  // the line was found gone at the last turn, with no trace of a run
   for (;;) {
     if (clock_->Now() >= call->Deadline()) {
@@ -421,7 +439,8 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
     // a line that ran leaves the input empty, so that is a retype cut short by a dropout (bug
     // fix, found by a simulated line's seed: "^R" damaged on its way back and cut short read as
     // a run, and the command was reported done and lost).
-    const bool gone = known_ && Gone(buf_, line) && !(!RTrim(buf_).empty() && StartsWith(line, buf_));
+    const bool gone =
+        known_ && Gone(buf_, line) && !(!RTrim(buf_).empty() && StartsWith(line, buf_));
     if (!known_) {
       send = val2::kCtrlR;  // what does the controller hold?
       ++counters_.probes;
@@ -598,7 +617,11 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
 Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, CallClock* call,
                               bool* moved) {
   *moved = false;
-  int on_way = 0, short_of = 0;  // reports in a row
+  // On its way: past the threshold and half the move (a move that ran ends at its whole).
+  const double on_way_at = std::max(1.0, 0.5 * WholeProgress(motion));
+  int on_way = 0, short_of = 0, still = 0;           // reports in a row
+  std::optional<std::array<double, 6>> last_joints;  // of the last report counted, and when
+  double last_t = 0.0;
   for (;;) {
     // The controller reads the joints when the WHERE runs, after it was asked.
     const Clock::TimePoint asked = clock_->Now();
@@ -607,22 +630,36 @@ Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, Call
     bool located = false;
     const Status s = Where(call, &report, &t, &located);
     if (s != Status::kOk) return s;
-    const double progress = Progress(motion, report, located);
-    if (opt_.trace) opt_.trace("motion check: progress " + std::to_string(progress));
+    double progress = Progress(motion, report, located);
     if (std::isnan(progress)) continue;  // a report that tells nothing: in a row, not counted
-    if (progress >= 1.0) {
-      ++on_way;
-      short_of = 0;
-    } else {
-      ++short_of;
-      on_way = 0;
+    // Short of half the move with the joints where the last report had them: at rest, a move
+    // that had run would be at its end (a corrupted digit moves a joint: never still).
+    bool at_rest = last_joints.has_value();
+    const double allowed_deg = opt_.still_deg_s * (t - last_t);
+    for (int k = 0; at_rest && k < 6; ++k) {
+      at_rest = std::abs(report.joints[k] - (*last_joints)[k]) <= allowed_deg;
     }
+    if (at_rest && !motion.joints_deg && !located_) {
+      // The joints' travel in any direction (the tool's rest location not known) counts the
+      // creep since the rest too: taken away at the rate these two still reports show.
+      double travel = 0.0;
+      for (int k = 0; k < 6; ++k) {
+        const double rate = (report.joints[k] - (*last_joints)[k]) / (t - last_t);
+        travel += std::pow(report.joints[k] - prev_deg_[k] - rate * (t - prev_t_), 2);
+      }
+      progress = std::sqrt(travel) / opt_.moved_deg;
+    }
+    if (opt_.trace) opt_.trace("motion check: progress " + std::to_string(progress));
+    last_joints = report.joints;
+    last_t = t;
+    on_way = progress >= on_way_at ? on_way + 1 : 0;
+    short_of = progress < 1.0 ? short_of + 1 : 0;
+    still = progress < on_way_at && at_rest ? still + 1 : 0;
     if (on_way >= 2) {
       *moved = true;
       return Status::kOk;
     }
-    if (short_of >= 2 &&
-        Clock::ToSeconds(asked - since) >= opt_.motion_start_s) {
+    if ((short_of >= 2 || still >= 2) && Clock::ToSeconds(asked - since) >= opt_.motion_start_s) {
       return Status::kOk;
     }
   }
@@ -897,8 +934,7 @@ void Val2Arm::Ran(const std::string& line, bool inferred) {
 
 Status Val2Arm::Fail(Status s) {
   if (s == Status::kDisconnected) lost_ = true;
-  if (silent_since_ &&
-      Clock::ToSeconds(clock_->Now() - *silent_since_) >= opt_.link_lost_s) {
+  if (silent_since_ && Clock::ToSeconds(clock_->Now() - *silent_since_) >= opt_.link_lost_s) {
     lost_ = true;
   }
   if (lost_ && s == Status::kTimeout) {

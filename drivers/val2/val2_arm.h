@@ -85,6 +85,22 @@ struct Val2Options {
   double moved_deg = 0.05;
   double moved_mm = 0.5;
   double moved_turn_deg = 0.25;
+  /// The check is decided at half the move rather than at its threshold when the move goes
+  /// further (a move that ran ends at its whole length; one that did not stays at its rest), and
+  /// two reports in a row below that with the joints still between them (under still_deg) mean
+  /// it did not run (still_deg_s): an arm at rest that creeps, under still_deg between two reads,
+  /// creeps on during a check that began late (the command retyped through corruption) and passed
+  /// the threshold on a cancelled move (taken as run: lost). A tool move's length in the joints,
+  /// where its rest location is not known, is bounded from below by the reach: a tool move of
+  /// d mm turning by a deg turns the joints by at least max(d / reach, a) / sqrt(6) (Euclidean,
+  /// rad). The tool's greatest distance from a joint axis, m (the Puma 260's is under 0.5 m).
+  double reach_m = 0.6;
+  /// Joints still between two reports of the check: none turned faster than this (deg/s):
+  /// still_deg over the 0.27 s a WHERE report takes at 9600 baud. Reports of a check come
+  /// further apart when corrupted ones are asked again (0.5-0.8 s at 1 % of the bytes), so
+  /// stillness is a rate. Between two still reports the joints' rate is the rest's own creep:
+  /// it is taken away from a tool move's joint travel since the rest (its location not known).
+  double still_deg_s = 0.04;
   /// When set, told every exchange with the controller (bytes sent, answer, what the driver
   /// made of it), for debugging a link.
   std::function<void(const std::string&)> trace;
@@ -181,7 +197,7 @@ class Val2Arm final : public device::Arm {
   /// of the tool relative to itself.
   struct Motion {
     std::optional<std::array<double, 6>> joints_deg;  ///< MoveJoints' target
-    Pose3 X_EEnew = Pose3::Identity();                 ///< MoveRelative's move
+    Pose3 X_EEnew = Pose3::Identity();                ///< MoveRelative's move
   };
   /// Whether `motion` goes far enough from the rest of the last Read for WHERE to settle a lost
   /// answer: twice the moved_* threshold.
@@ -192,14 +208,19 @@ class Val2Arm final : public device::Arm {
   /// intact; NaN when not), or, when the location at the rest is not known, as the joints'
   /// travel from the rest in any direction (moved_deg).
   double Progress(const Motion& motion, const val2::WhereReport& report, bool located) const;
+  /// The whole of `motion` in Progress' units (the arm at the move's end: at least this; for a
+  /// tool move whose rest location is not known, a lower bound through reach_m).
+  double WholeProgress(const Motion& motion) const;
   /// Runs one state-changing command line (the common path of the commands). `motion`: a move
   /// that WHERE can see (it goes 2 thresholds: see moved_deg), so that a lost answer can be
   /// settled by the arm.
   device::Status Command(const std::string& line, bool is_stop, bool is_motion,
                          const Motion* motion = nullptr);
-  /// Whether the arm has left the rest of the last Read on its way to `motion` (see moved_deg):
-  /// WHERE until two reports in a row show it on its way (*moved), or two in a row, the second
-  /// asked motion_start_s after `since`, show it not.
+  /// Whether the arm has left the rest of the last Read on its way to `motion` (see moved_deg
+  /// and reach_m): WHERE until two reports in a row show it on its way (*moved: past the
+  /// threshold, and past half the move), or two in a row, the second asked motion_start_s after
+  /// `since`, show it not (short of the threshold, or short of half the move with the joints
+  /// still between them).
   device::Status MovedFromRest(Clock::TimePoint since, const Motion& motion, CallClock* call,
                                bool* moved);
   /// One WHERE report, parsed: the joints always; the location when `located` says so.
