@@ -28,6 +28,7 @@
 #include "emulators/laser_board_emulator.h"
 #include "emulators/sensorhand_emulator.h"
 #include "emulators/val2_emulator.h"
+#include "tests/support/fast_homing.h"
 
 namespace hgrasp {
 namespace {
@@ -39,9 +40,6 @@ std::string ReadFile(const fs::path& p) {
   std::ifstream f(p);
   return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
-
-// Homing sweeps faster than BiclopsDefault.cfg's, as a test can afford.
-constexpr const char* kFastHoming = "{homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}";
 
 TEST(CliRealRobot, EveryDeviceRealBuildsNoWorldAndNoEglContext) {
   const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_real_robot";
@@ -74,8 +72,7 @@ TEST(CliRealRobot, EveryDeviceRealBuildsNoWorldAndNoEglContext) {
                           << "  hand_right: {driver: sensorhand, port: " << hand_right.port()
                           << "}\n"
                           << "  head: {driver: biclops, port: " << head.port()
-                          << ", options: {pan: " << kFastHoming << ", tilt: " << kFastHoming
-                          << ", verge: " << kFastHoming << "}}\n"
+                          << ", options: " << testing::kFastHoming << "}\n"
                           << "  laser: {driver: laser_board, port: " << board.port() << "}\n"
                           << "  leds: {driver: laser_board, port: " << board.port() << "}\n"
                           << "  cameras: {driver: gstreamer, left: " << camera

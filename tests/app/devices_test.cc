@@ -20,6 +20,7 @@
 #include "emulators/val2_emulator.h"
 #include "laser_board/board_devices.h"
 #include "sensorhand/sensorhand_hand.h"
+#include "tests/support/fast_homing.h"
 #include "val2/val2_arm.h"
 
 namespace hgrasp::app {
@@ -40,9 +41,6 @@ bool WaitFor(const std::function<bool()>& done, double timeout_s) {
 }
 
 // Homing sweeps faster than BiclopsDefault.cfg's (pan 50 deg/s at 10 deg/s^2), as a test can
-// afford: the options reach the driver through the scenario.
-constexpr const char* kFastHoming = "{homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}";
-
 double TrueCounts(drivers::EmulatorHost& host, int axis) {
   return host.With([axis](drivers::DeviceEmulator& d) {
     return dynamic_cast<drivers::BiclopsEmulator&>(d).chip().position_counts(axis);
@@ -63,10 +61,8 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
                       << arm.port()
                       << "}\n"
                          "  head: {driver: biclops, port: "
-                      << head.port()
-                      << ", options: {pan: " << kFastHoming << ", tilt: " << kFastHoming
-                      << ", verge: " << kFastHoming
-                      << "}}\n"
+                      << head.port() << ", options: " << testing::kFastHoming
+                      << "}\n"
                          "  hand_right: {driver: sensorhand, port: "
                       << hand.port()
                       << "}\n"

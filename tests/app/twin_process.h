@@ -17,13 +17,9 @@
 #include <thread>
 #include <vector>
 
-namespace hgrasp::testing {
+#include "tests/support/fast_homing.h"
 
-/// The Biclops homing fast enough for a test (the driver's defaults take about a minute).
-inline const char* kFastHoming =
-    "{pan: {homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}, "
-    "tilt: {homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}, "
-    "verge: {homing_speed_rad_s: 1.5, homing_accel_rad_s2: 10}}";
+namespace hgrasp::testing {
 
 /// A JSON file (a report, twin.json); null when it is missing or does not parse.
 inline nlohmann::json ReadJson(const std::filesystem::path& p) {
@@ -54,8 +50,8 @@ class TwinProcess {
              const std::vector<std::string>& extra = {}, double ready_s = 60.0) {
     dir_ = dir;
     std::filesystem::remove_all(dir);
-    std::vector<std::string> args = {HGRASP_BINARY, "twin",        scenario,    "--dir",
-                                     dir.string(),  "--camera-ports", "0",     "0",
+    std::vector<std::string> args = {HGRASP_BINARY,    "twin",           scenario, "--dir",
+                                     dir.string(),     "--camera-ports", "0",      "0",
                                      "--head-options", kFastHoming};
     args.insert(args.end(), extra.begin(), extra.end());
     const std::string log = dir.string() + ".log";

@@ -17,6 +17,7 @@
 #include "laser_board/laser_board.h"
 #include "serial/faulty_link.h"
 #include "serial/serial_port.h"
+#include "tests/support/line_rig.h"
 
 namespace hgrasp::drivers::testing {
 
@@ -78,29 +79,14 @@ class BoardRig {
 };
 
 /// The emulator on a simulated line (SimLine) at the board's baud rate, in simulated time.
-class SimBoardRig {
+class SimBoardRig : public hgrasp::testing::LineRig<LaserBoardEmulator> {
  public:
   explicit SimBoardRig(const LaserBoardEmulatorConfig& config = LaserBoardEmulatorConfig{})
-      : line_(clock, std::make_unique<LaserBoardEmulator>(config), laser_board::kBaud) {}
+      : LineRig(std::make_unique<LaserBoardEmulator>(config), laser_board::kBaud) {}
 
-  /// The driver's end of the line.
-  std::unique_ptr<ByteLink> Open() { return line_.Open(); }
-  SimLine& line() { return line_; }
-
-  template <class F>
-  auto With(F&& f) {
-    return line_.With([&](DeviceEmulator& d) { return f(dynamic_cast<LaserBoardEmulator&>(d)); });
-  }
   std::vector<laser_board::Command> Executed() {
     return With([](LaserBoardEmulator& e) { return e.ExecutedCommands(); });
   }
-  /// Simulated seconds since `t0`.
-  double Since(Clock::TimePoint t0) const { return Clock::ToSeconds(clock.Now() - t0); }
-
-  SimClock clock;
-
- private:
-  SimLine line_;
 };
 
 }  // namespace hgrasp::drivers::testing

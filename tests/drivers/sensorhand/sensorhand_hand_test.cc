@@ -26,6 +26,7 @@
 #include "emulators/sim_line.h"
 #include "sensorhand/sensorhand_codec.h"
 #include "serial/faulty_link.h"
+#include "tests/support/line_rig.h"
 
 namespace hgrasp::drivers {
 namespace {
@@ -156,20 +157,22 @@ RigOptions WithObject(double width_m, bool faulty = false) {
 // The emulator at the far end of a SimLine (with the plan's faults when `faulty`), the driver on
 // its host end (optionally behind a FilterLink), all on one SimClock. The hand is declared last
 // so that it goes first, while its line is still there.
-struct Rig {
-  explicit Rig(const RigOptions& o = {}) {
-    SensorHandMechanics m;
-    m.object_width_m = o.object_width_m;
-    line = std::make_unique<SimLine>(
-        clock, std::make_unique<SensorHandEmulator>(std::make_unique<KinematicSensorHand>(m)),
-        kBaud, o.faulty ? std::optional<FaultPlan>(o.plan) : std::nullopt);
+std::unique_ptr<SensorHandEmulator> EmulatorFor(const RigOptions& o) {
+  SensorHandMechanics m;
+  m.object_width_m = o.object_width_m;
+  return std::make_unique<SensorHandEmulator>(std::make_unique<KinematicSensorHand>(m));
+}
+
+struct Rig : hgrasp::testing::LineRig<SensorHandEmulator> {
+  explicit Rig(const RigOptions& o = {})
+      : LineRig(EmulatorFor(o), kBaud, o.faulty ? std::optional<FaultPlan>(o.plan) : std::nullopt) {
     if (o.running_at_start) {
-      line->With([&](DeviceEmulator& d) {
+      With([&](SensorHandEmulator& e) {
         std::vector<std::uint8_t> ignored;
-        d.Receive(sensorhand::EncodeSpeed(*o.running_at_start), line->Now(), &ignored);
+        e.Receive(sensorhand::EncodeSpeed(*o.running_at_start), line().Now(), &ignored);
       });
     }
-    std::unique_ptr<ByteLink> link = line->Open();
+    std::unique_ptr<ByteLink> link = Open();
     const FilterPlan& fp = o.filter;
     if (fp.drop_echoes || fp.drop_every_nth_command > 0 || fp.drop_close_number > 0 ||
         fp.drop_command_number > 0 || fp.blind_after_close_s > 0.0 || fp.state_as) {
@@ -179,23 +182,17 @@ struct Rig {
     }
     hand = std::make_unique<SensorHandHand>(std::move(link), o.hand, clock);
   }
-  template <class F>
-  auto Emu(F f) {
-    return line->With([&](DeviceEmulator& d) { return f(dynamic_cast<SensorHandEmulator&>(d)); });
-  }
   Clock::TimePoint Now() const { return clock.Now(); }
-  // Simulated seconds since `t0`.
-  double Since(Clock::TimePoint t0) const { return Clock::ToSeconds(clock.Now() - t0); }
   // Lets `s` simulated seconds pass (the driver's loop and the hand run meanwhile).
   void Wait(double s) { clock.SleepFor(s); }
   double Opening() {
-    return Emu([](SensorHandEmulator& e) { return e.model().opening_m(); });
+    return With([](SensorHandEmulator& e) { return e.model().opening_m(); });
   }
   double Force() {
-    return Emu([](SensorHandEmulator& e) { return e.model().grip_force_n(); });
+    return With([](SensorHandEmulator& e) { return e.model().grip_force_n(); });
   }
   std::vector<SpeedSetting> EmuLog() {
-    return Emu([](SensorHandEmulator& e) { return e.speed_log(); });
+    return With([](SensorHandEmulator& e) { return e.speed_log(); });
   }
   // The never-twice check: the hand executed exactly what the driver saw it execute, and no
   // setting twice in a row (the driver only ever sends a change, so a repeat is a duplicate).
@@ -208,7 +205,7 @@ struct Rig {
       EXPECT_FALSE(emu[i] == emu[i - 1]) << "command " << i << " executed twice";
     }
     // The driver's command log explains everything the hand executed, stream starts included.
-    const auto all = Emu([](SensorHandEmulator& e) {
+    const auto all = With([](SensorHandEmulator& e) {
       std::vector<sensorhand::Command> v;
       for (const SensorHandLogEntry& x : e.log()) v.push_back(x.command);
       return v;
@@ -236,8 +233,6 @@ struct Rig {
   }
   // |estimated - true opening| (m), once the fingers are still.
   double EstimateError() { return std::abs(hand->estimate().opening_m - Opening()); }
-  SimClock clock;
-  std::unique_ptr<SimLine> line;
   FilterLink* filter = nullptr;
   std::unique_ptr<SensorHandHand> hand;
 };
@@ -250,7 +245,7 @@ TEST(SensorHandHand, StartsTheStreamAndReads) {
   EXPECT_EQ(s.grip_force_n, 0.0);
   EXPECT_FALSE(s.moving);
   EXPECT_GT(s.t_s, 0.0);
-  EXPECT_TRUE(rig.Emu([](SensorHandEmulator& e) { return e.streaming(); }));
+  EXPECT_TRUE(rig.With([](SensorHandEmulator& e) { return e.streaming(); }));
   EXPECT_TRUE(rig.EmuLog().empty());  // at rest (the state byte says idle): nothing to command
   // The opening is the assumed start pose: nothing on the wire says otherwise.
   EXPECT_FALSE(rig.hand->estimate().referenced);
@@ -326,7 +321,7 @@ TEST(SensorHandHand, ClosesToTheForceLimit) {
     std::printf("Close(%.0f N): %.1f N at %.4f m, estimate %.4f m\n", limit, f, rig.Opening(),
                 s.opening_m);
     // Speed 0 holds the grip.
-    EXPECT_EQ(rig.Emu([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
+    EXPECT_EQ(rig.With([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
   }
   ASSERT_EQ(rig.hand->Open(0.08), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
@@ -344,7 +339,7 @@ TEST(SensorHandHand, ClosesUntilTheFingersMeet) {
   ASSERT_EQ(rig.hand->Close(50.0), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
   EXPECT_LT(rig.Opening(), 0.0005);
-  EXPECT_EQ(rig.Emu([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
+  EXPECT_EQ(rig.With([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
   // Blocked without a force: the fingers meet, which fixes the estimate at 0.
   EXPECT_EQ(rig.hand->estimate().opening_m, 0.0);
   EXPECT_EQ(rig.hand->estimate().fixes, 1);
@@ -440,7 +435,7 @@ TEST(SensorHandHand, StopsAHandFoundMoving) {
   o.running_at_start = SpeedSetting{0x35, 0};  // opening slowly
   Rig rig(o);
   ASSERT_TRUE(rig.hand->WaitIdle(2.0));
-  EXPECT_EQ(rig.Emu([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
+  EXPECT_EQ(rig.With([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
   const auto log = rig.EmuLog();
   ASSERT_EQ(log.size(), 2u);
   EXPECT_EQ(log[1], sensorhand::kStop);
@@ -535,8 +530,8 @@ TEST(SensorHandHand, AnOpenWhoseStopIsLostGoesBackToItsTargetFromTheEndStop) {
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
   ASSERT_DOUBLE_EQ(rig.Opening(), 0.10);
   const Clock::TimePoint t0 = rig.Now();
-  rig.clock.At(t0 + std::chrono::milliseconds(50), [&] { rig.line->Cut(true); });
-  rig.clock.At(t0 + std::chrono::milliseconds(550), [&] { rig.line->Cut(false); });
+  rig.clock.At(t0 + std::chrono::milliseconds(50), [&] { rig.line().Cut(true); });
+  rig.clock.At(t0 + std::chrono::milliseconds(550), [&] { rig.line().Cut(false); });
   ASSERT_EQ(rig.hand->Open(0.06), Status::kOk);
   rig.Wait(0.5);  // the line still cut
   const double shut = rig.Opening();
@@ -655,10 +650,10 @@ TEST(SensorHandHand, ReversalLostWhileThePadsLeaveTheObjectIsSentAgain) {
 TEST(SensorHandHand, ClosingUnseenOntoAnObjectHomesFirst) {
   Rig rig(WithObject(0.05, true));
   ASSERT_EQ(rig.hand->Open(0.01), Status::kOk);  // closing at full speed from 0.08 m
-  rig.line->Cut(true);
+  rig.line().Cut(true);
   rig.Wait(0.4);
   EXPECT_GT(rig.Force(), 50.0);  // stalled on the object, pressing hard, unseen
-  rig.line->Cut(false);
+  rig.line().Cut(false);
   ASSERT_TRUE(rig.hand->WaitIdle(5.0));
   const SensorHandEstimate e = rig.hand->estimate();
   std::printf("after the unseen grip: %.4f m, estimate %.4f m, %d fixes, %.1f N\n", rig.Opening(),
@@ -694,7 +689,7 @@ TEST(SensorHandHand, UnjudgedCommandIsReportedAndTheFingersStopped) {
   EXPECT_TRUE(rig.hand->executed().empty());
   EXPECT_EQ(rig.hand->Open(0.03), Status::kTimeout);  // never confirmed
   rig.Wait(1.2);
-  EXPECT_EQ(rig.Emu([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
+  EXPECT_EQ(rig.With([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
   EXPECT_GE(rig.hand->stats().unresolved, 2u);
 }
 
@@ -707,14 +702,14 @@ TEST(SensorHandHand, RejectsBadArguments) {
   EXPECT_THROW(SensorHandHand(nullptr), hgrasp::InputError);
   SensorHandOptions bad;
   bad.slow_speed_m_s = 1.0;
-  EXPECT_THROW({ SensorHandHand h(rig.line->Open(), bad, rig.clock); }, hgrasp::InputError);
+  EXPECT_THROW({ SensorHandHand h(rig.line().Open(), bad, rig.clock); }, hgrasp::InputError);
   // The estimate's options: a start outside the range, a speed error of 100%, a negative
   // uncertainty, no time to judge a command.
   auto refused = [&](auto set) {
     SensorHandOptions o;
     set(o);
     try {
-      SensorHandHand h(rig.line->Open(), o, rig.clock);
+      SensorHandHand h(rig.line().Open(), o, rig.clock);
     } catch (const hgrasp::InputError& e) {
       return std::string(e.what());
     }
@@ -741,8 +736,8 @@ TEST(SensorHandHand, StopsTheFingersAndTheStreamWhenDestroyed) {
   ASSERT_EQ(rig.hand->Open(0.0), Status::kOk);  // closing at full speed
   rig.hand.reset();
   rig.Wait(0.01);  // its last bytes (the stop, the stream's stop) are still on the wire
-  EXPECT_EQ(rig.Emu([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
-  EXPECT_FALSE(rig.Emu([](SensorHandEmulator& e) { return e.streaming(); }));
+  EXPECT_EQ(rig.With([](SensorHandEmulator& e) { return e.speed(); }), sensorhand::kStop);
+  EXPECT_FALSE(rig.With([](SensorHandEmulator& e) { return e.streaming(); }));
   EXPECT_GT(rig.Opening(), 0.01);
 }
 
@@ -750,10 +745,10 @@ TEST(SensorHandHand, RestartsTheStreamAfterAHandReset) {
   Rig rig;
   HandState s;
   ASSERT_EQ(rig.hand->Read(&s), Status::kOk);
-  rig.Emu([](SensorHandEmulator& e) { e.PowerCycle(); });
+  rig.With([](SensorHandEmulator& e) { e.PowerCycle(); });
   rig.Wait(0.15);
   ASSERT_EQ(rig.hand->Read(&s), Status::kOk);
-  EXPECT_TRUE(rig.Emu([](SensorHandEmulator& e) { return e.streaming(); }));
+  EXPECT_TRUE(rig.With([](SensorHandEmulator& e) { return e.streaming(); }));
   ASSERT_EQ(rig.hand->Open(0.04), Status::kOk);
   ASSERT_TRUE(rig.hand->WaitIdle(3.0));
   rig.ExpectOpeningNear(0.04);
@@ -764,7 +759,7 @@ TEST(SensorHandHand, CutLinkReportedWithinHalfASecondAndRecovered) {
   Rig rig(WithObject(0.05, true));
   HandState s;
   ASSERT_EQ(rig.hand->Read(&s), Status::kOk);
-  rig.line->Cut(true);
+  rig.line().Cut(true);
   auto t0 = rig.Now();
   const Status open = rig.hand->Open(0.03);
   const double t_open = rig.Since(t0);
@@ -784,7 +779,7 @@ TEST(SensorHandHand, CutLinkReportedWithinHalfASecondAndRecovered) {
   EXPECT_LT(t_open, 0.5);
   EXPECT_LT(t_read, 0.5);
   EXPECT_LT(t_close, 0.5);
-  rig.line->Cut(false);
+  rig.line().Cut(false);
   t0 = rig.Now();
   Status st;
   while ((st = rig.hand->Open(0.07)) != Status::kOk && rig.Since(t0) < 2.0) {
@@ -801,9 +796,9 @@ TEST(SensorHandHand, VanishedPortReportedAndRecovered) {
   HandState s;
   ASSERT_EQ(rig.hand->Read(&s), Status::kOk);
   for (bool power_cycle : {false, true}) {
-    rig.line->Vanish();
+    rig.line().Vanish();
     // A hand re-powered while its port was away comes back with its stream off.
-    if (power_cycle) rig.Emu([](SensorHandEmulator& e) { e.PowerCycle(); });
+    if (power_cycle) rig.With([](SensorHandEmulator& e) { e.PowerCycle(); });
     rig.Wait(0.05);
     auto t0 = rig.Now();
     const Status open = rig.hand->Open(0.02);
@@ -818,7 +813,7 @@ TEST(SensorHandHand, VanishedPortReportedAndRecovered) {
     EXPECT_TRUE(read == Status::kDisconnected || read == Status::kTimeout);
     EXPECT_LT(t_open, 0.5);
     EXPECT_LT(t_read, 0.5);
-    rig.line->Reappear();
+    rig.line().Reappear();
     t0 = rig.Now();
     Status st;
     while ((st = rig.hand->Read(&s)) != Status::kOk && rig.Since(t0) < 3.0) {
@@ -829,7 +824,7 @@ TEST(SensorHandHand, VanishedPortReportedAndRecovered) {
     ASSERT_EQ(rig.hand->Open(target), Status::kOk);
     ASSERT_TRUE(rig.hand->WaitIdle(3.0));
     rig.ExpectOpeningNear(target);
-    EXPECT_TRUE(rig.Emu([](SensorHandEmulator& e) { return e.streaming(); }));
+    EXPECT_TRUE(rig.With([](SensorHandEmulator& e) { return e.streaming(); }));
   }
   // The power cycle reset the emulator's counter, not its log.
   rig.ExpectLogsAgree();
@@ -897,7 +892,7 @@ TEST(SensorHandHand, FaultInjection1000Commands) {
               drift_err * 1e3, drift.uncertainty_m * 1e3, drift.fixes);
   EXPECT_LE(drift_err, drift.uncertainty_m);
   rig.ExpectOpeningNear(0.065, 0.0015);
-  const FaultCounts fc = rig.line->counts();
+  const FaultCounts fc = rig.line().counts();
   const SensorHandStats hs = rig.hand->stats();
   std::printf(
       "fault injection: %d calls ok (%d Open, %d Close, %d Read), %d retried (%d timeouts) in "

@@ -11,9 +11,10 @@
 #include <chrono>
 #include <thread>
 
-#include "emulators/val2_emulator.h"
 #include "emulators/sim_line.h"
+#include "emulators/val2_emulator.h"
 #include "tests/drivers/val2/val2_test_util.h"
+#include "tests/support/line_rig.h"
 
 namespace hgrasp::drivers {
 namespace {
@@ -22,17 +23,12 @@ using device::Joint6;
 using device::Status;
 
 // An emulated controller on a simulated line and the driver on its other end.
-struct Rig {
+struct Rig : hgrasp::testing::LineRig<Val2Emulator> {
   explicit Rig(std::unique_ptr<Val2Emulator> emulator = MakeVal2Emulator())
-      : host(clock, std::move(emulator), 9600) {
-    arm = std::make_unique<Val2Arm>(host.Open(), Val2Options{}, clock);
-  }
-  template <class F>
-  auto Emu(F f) {
-    return host.With([&](DeviceEmulator& d) { return f(dynamic_cast<Val2Emulator&>(d)); });
-  }
+      : LineRig(std::move(emulator), 9600),
+        arm(std::make_unique<Val2Arm>(Open(), Val2Options{}, clock)) {}
   std::vector<std::string> Executed() {
-    return Emu([](Val2Emulator& e) {
+    return With([](Val2Emulator& e) {
       std::vector<std::string> lines;
       for (const Val2Executed& x : e.executed()) lines.push_back(x.line);
       return lines;
@@ -51,8 +47,6 @@ struct Rig {
     return s;
   }
 
-  SimClock clock;
-  SimLine host;
   std::unique_ptr<Val2Arm> arm;
 };
 
@@ -61,7 +55,7 @@ TEST(Val2Arm, ReadsTheJointsAtRest) {
   device::ArmState a, b;
   ASSERT_EQ(rig.arm->Read(&a), Status::kOk);
   ASSERT_EQ(rig.arm->Read(&b), Status::kOk);
-  const Joint6 q = rig.Emu([](Val2Emulator& e) { return e.model().q(); });
+  const Joint6 q = rig.With([](Val2Emulator& e) { return e.model().q(); });
   for (int k = 0; k < 6; ++k) EXPECT_NEAR(b.q[k], q[k], DegToRad(0.0005));
   EXPECT_FALSE(b.moving);
   EXPECT_GT(b.t_s, a.t_s);
@@ -75,7 +69,7 @@ TEST(Val2Arm, MoveJointsReachesTheTarget) {
   ASSERT_EQ(rig.arm->MoveJoints(target), Status::kOk);
   const device::ArmState s = rig.WaitStill();
   for (int k = 0; k < 6; ++k) EXPECT_NEAR(s.q[k], target[k], DegToRad(0.0005)) << k;
-  const Joint6 q = rig.Emu([](Val2Emulator& e) { return e.model().q(); });
+  const Joint6 q = rig.With([](Val2Emulator& e) { return e.model().q(); });
   EXPECT_LT((q - target).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_EQ(rig.Executed(),
             std::vector<std::string>{val2::Encode(val2::MoveJointsCommand(ToDeg(target)))});
@@ -90,7 +84,7 @@ TEST(Val2Arm, ReadingsFollowTheMotion) {
   bool saw_moving = false;
   for (int n = 0; n < 20; ++n) {
     ASSERT_EQ(rig.arm->Read(&s), Status::kOk);
-    const Joint6 q = rig.Emu([](Val2Emulator& e) { return e.model().q(); });
+    const Joint6 q = rig.With([](Val2Emulator& e) { return e.model().q(); });
     // The reading is not ahead of the model now (it moves on), within the printed 0.001 deg.
     EXPECT_LE(s.q[0], q[0] + DegToRad(0.0005) + 1e-12);
     if (s.moving && s.qd[0] > 0.0) saw_moving = true;
@@ -102,15 +96,15 @@ TEST(Val2Arm, ReadingsFollowTheMotion) {
 
 TEST(Val2Arm, MoveRelativeInTheGripperFrame) {
   Rig rig;
-  const Joint6 q0 = rig.Emu([](Val2Emulator& e) { return e.model().q(); });
-  const Pose3 X_WE0 = rig.Emu([&](Val2Emulator& e) { return e.kinematics().Forward(q0); });
+  const Joint6 q0 = rig.With([](Val2Emulator& e) { return e.model().q(); });
+  const Pose3 X_WE0 = rig.With([&](Val2Emulator& e) { return e.kinematics().Forward(q0); });
   Pose3 delta = Pose3::Identity();
   delta.translate(Eigen::Vector3d(0.012, -0.021, 0.0155));
   delta.rotate(Eigen::AngleAxisd(DegToRad(7.5), Eigen::Vector3d(1, 2, -1).normalized()));
   ASSERT_EQ(rig.arm->MoveRelative(delta), Status::kOk);
   rig.WaitStill();
-  const Joint6 q1 = rig.Emu([](Val2Emulator& e) { return e.model().q(); });
-  const Pose3 X_WE1 = rig.Emu([&](Val2Emulator& e) { return e.kinematics().Forward(q1); });
+  const Joint6 q1 = rig.With([](Val2Emulator& e) { return e.model().q(); });
+  const Pose3 X_WE1 = rig.With([&](Val2Emulator& e) { return e.kinematics().Forward(q1); });
   const Pose3 want = X_WE0 * delta;
   EXPECT_LT((X_WE1.translation() - want.translation()).norm(), 2e-5);
   EXPECT_LT(Eigen::AngleAxisd(X_WE1.linear().transpose() * want.linear()).angle(), DegToRad(0.003));
@@ -128,7 +122,7 @@ TEST(Val2Arm, OutOfReachIsRejected) {
   EXPECT_EQ(rig.arm->SetSpeed(0.0), Status::kRejected);  // refused before sending
   EXPECT_EQ(rig.arm->SetSpeed(1.5), Status::kRejected);
   EXPECT_TRUE(rig.Executed().empty());
-  const auto refused = rig.Emu([](Val2Emulator& e) { return e.refused(); });
+  const auto refused = rig.With([](Val2Emulator& e) { return e.refused(); });
   ASSERT_EQ(refused.size(), 2u);
   EXPECT_EQ(refused[0].second, "Position out of range");
   // The arm still works.
@@ -138,12 +132,12 @@ TEST(Val2Arm, OutOfReachIsRejected) {
 TEST(Val2Arm, SetSpeedScalesTheJointSpeeds) {
   Rig rig;
   ASSERT_EQ(rig.arm->SetSpeed(0.25), Status::kOk);
-  EXPECT_EQ(rig.Emu([](Val2Emulator& e) { return e.speed_percent(); }), 25.0);
+  EXPECT_EQ(rig.With([](Val2Emulator& e) { return e.speed_percent(); }), 25.0);
   ASSERT_EQ(rig.arm->MoveJoints(Deg({60, -60, 30, 0, -45, 0})), Status::kOk);
   // Joint 1 alone moves 60 deg: it cruises at 25 % of 120 deg/s.
   double peak = 0.0;
   for (int n = 0; n < 300; ++n) {
-    peak = std::max(peak, rig.Emu([](Val2Emulator& e) { return std::abs(e.model().qd()[0]); }));
+    peak = std::max(peak, rig.With([](Val2Emulator& e) { return std::abs(e.model().qd()[0]); }));
     rig.clock.SleepFor(0.005);
   }
   EXPECT_NEAR(RadToDeg(peak), 30.0, 0.5);
