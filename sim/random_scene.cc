@@ -22,36 +22,6 @@ constexpr int kSceneAttempts = 100;
 
 using Footprint = std::array<Eigen::Vector2d, 4>;
 
-double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                            const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-  return (a + t * ab - p).norm();
-}
-
-// Distance between two convex footprints (0 when they overlap): for disjoint convex polygons
-// the nearest points include a vertex of one of them.
-double FootprintDistance(const Footprint& a, const Footprint& b) {
-  if (FootprintsOverlap(a, b)) return 0.0;
-  double d = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < 4; ++i) {
-    for (int k = 0; k < 4; ++k) {
-      d = std::min(d, PointSegmentDistance(a[i], b[k], b[(k + 1) % 4]));
-      d = std::min(d, PointSegmentDistance(b[i], a[k], a[(k + 1) % 4]));
-    }
-  }
-  return d;
-}
-
-bool OnTable(const Footprint& f) {
-  for (const Eigen::Vector2d& c : f) {
-    if (c.x() < kTableMinX || c.x() > kTableMaxX || c.y() < kTableMinY || c.y() > kTableMaxY) {
-      return false;
-    }
-  }
-  return true;
-}
-
 void CheckOptions(const RandomSceneOptions& o) {
   auto fail = [](const std::string& what) {
     throw std::invalid_argument("RandomBoxScene: " + what);
@@ -89,7 +59,7 @@ bool PlaceBoxes(int count, const RandomSceneOptions& options, Draw* draw,
       o.position_W.x() = draw->Real(kWorkspaceMinX, kWorkspaceMaxX);
       o.position_W.y() = draw->Real(kWorkspaceMinY, kWorkspaceMaxY);
       const Footprint f = ObjectFootprint(o);
-      placed = OnTable(f);
+      placed = FootprintOnTable(f);
       for (const Footprint& other : footprints) {
         // Separated: with min_gap_m = 0, overlapping footprints (distance 0) stay apart too.
         placed = placed && !FootprintsOverlap(f, other) &&
@@ -123,25 +93,38 @@ const std::array<NamedColor, 10>& RandomScenePalette() {
   return kPalette;
 }
 
+std::array<int, 10> DrawPaletteOrder(Draw* draw, int count) {
+  std::array<int, 10> colors;
+  for (int i = 0; i < 10; ++i) colors[i] = i;
+  for (int i = 0; i < count; ++i) std::swap(colors[i], colors[draw->Int(i, 9)]);
+  return colors;
+}
+
+bool PlaceWithFewerBoxes(int wanted, int min_boxes, int attempts,
+                         const std::function<bool(int, std::vector<ObjectSpec>*)>& place,
+                         std::vector<ObjectSpec>* boxes) {
+  for (int count = wanted; count >= min_boxes; --count) {
+    for (int attempt = 0; attempt < attempts; ++attempt) {
+      if (place(count, boxes)) return true;
+    }
+  }
+  return false;
+}
+
 Scenario RandomBoxScene(std::uint64_t seed, const RandomSceneOptions& options) {
   CheckOptions(options);
   Draw draw(seed);
   const std::array<NamedColor, 10>& palette = RandomScenePalette();
 
   const int wanted = draw.Int(options.min_boxes, options.max_boxes);
-  // Colours without replacement: the first `wanted` entries of a Fisher-Yates shuffle.
-  std::array<int, 10> colors;
-  for (int i = 0; i < 10; ++i) colors[i] = i;
-  for (int i = 0; i < wanted; ++i) std::swap(colors[i], colors[draw.Int(i, 9)]);
-
+  const std::array<int, 10> colors = DrawPaletteOrder(&draw, wanted);
   std::vector<ObjectSpec> boxes;
-  bool placed = false;
-  for (int count = wanted; count >= options.min_boxes && !placed; --count) {
-    for (int attempt = 0; attempt < kSceneAttempts && !placed; ++attempt) {
-      placed = PlaceBoxes(count, options, &draw, &boxes);
-    }
-  }
-  if (!placed) {
+  if (!PlaceWithFewerBoxes(
+          wanted, options.min_boxes, kSceneAttempts,
+          [&](int count, std::vector<ObjectSpec>* b) {
+            return PlaceBoxes(count, options, &draw, b);
+          },
+          &boxes)) {
     throw std::runtime_error("RandomBoxScene: seed " + std::to_string(seed) + ": could not place " +
                              std::to_string(options.min_boxes) + " boxes " +
                              std::to_string(options.min_gap_m) + " m apart in the workspace");

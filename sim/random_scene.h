@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -57,6 +58,19 @@ struct RandomSceneOptions {
 ///
 /// Throws std::invalid_argument when `options` are out of the ranges above.
 Scenario RandomBoxScene(std::uint64_t seed, const RandomSceneOptions& options = {});
+
+class Draw;
+
+/// Colours for `count` boxes without replacement: indices into RandomScenePalette(), the first
+/// `count` entries of a Fisher-Yates shuffle drawn from `draw` (count <= 10).
+std::array<int, 10> DrawPaletteOrder(Draw* draw, int count);
+
+/// Places a scene's boxes with `place(count, &boxes)` (true when all `count` fit), `attempts`
+/// times for `wanted` boxes, then as often for one box fewer, down to min_boxes; false when no
+/// attempt placed them.
+bool PlaceWithFewerBoxes(int wanted, int min_boxes, int attempts,
+                         const std::function<bool(int, std::vector<ObjectSpec>*)>& place,
+                         std::vector<ObjectSpec>* boxes);
 
 /// The colour name a random scene gave each object (same order as scenario.objects): the name
 /// before "_box". Throws std::invalid_argument when an object's name is not "<palette name>_box".

@@ -55,10 +55,9 @@ ScanTruthFigures ScanTruth::Score(const World& world, const std::vector<Point>& 
     for (const Eigen::Vector3d& t : truth) {
       ++f.truth_points;
       if (found == by_frame.end()) continue;
-      f.covered += std::any_of(found->second.begin(), found->second.end(),
-                               [&](const Eigen::Vector3d* p) {
-                                 return (*p - t).norm() < kCoverageRadiusM;
-                               });
+      f.covered +=
+          std::any_of(found->second.begin(), found->second.end(),
+                      [&](const Eigen::Vector3d* p) { return (*p - t).norm() < kCoverageRadiusM; });
     }
   }
   return f;
@@ -72,6 +71,11 @@ std::string_view NearestPaletteName(const Eigen::Vector3d& rgb) {
     if (d < best_d) best_d = d, best = c.name;
   }
   return best;
+}
+
+std::string_view TrueColorName(const ObjectSpec& object) {
+  if (!object.color_name.empty()) return object.color_name;
+  return NearestPaletteName(object.color_rgb);
 }
 
 }  // namespace hgrasp::sim

@@ -20,13 +20,13 @@ constexpr double kOutlierDistanceM = 0.005;
 constexpr double kCoverageRadiusM = 0.005;
 
 struct ScanTruthFigures {
-  int points = 0;                ///< range points scored
-  double rms_m = 0;              ///< RMS distance to the nearest true surface (m), all points
-  double median_m = 0;           ///< median of that distance (m)
-  double p99_m = 0;              ///< its 99th percentile (m)
-  int outliers = 0;              ///< points farther than kOutlierDistanceM
-  int truth_points = 0;          ///< true stripe points (one per image row) both cameras saw
-  int covered = 0;               ///< of those, measured (kCoverageRadiusM, same frame)
+  int points = 0;        ///< range points scored
+  double rms_m = 0;      ///< RMS distance to the nearest true surface (m), all points
+  double median_m = 0;   ///< median of that distance (m)
+  double p99_m = 0;      ///< its 99th percentile (m)
+  int outliers = 0;      ///< points farther than kOutlierDistanceM
+  int truth_points = 0;  ///< true stripe points (one per image row) both cameras saw
+  int covered = 0;       ///< of those, measured (kCoverageRadiusM, same frame)
   double outlier_fraction() const { return points > 0 ? double(outliers) / points : 0.0; }
   double coverage() const { return truth_points > 0 ? double(covered) / truth_points : 0.0; }
 };
@@ -63,5 +63,10 @@ class ScanTruth {
 /// The name of the random scenes' palette colour (sim::RandomScenePalette) nearest to `rgb` (RGB
 /// 0-1, Euclidean): the colour a scenario's object truly has, in the words targets use.
 std::string_view NearestPaletteName(const Eigen::Vector3d& rgb);
+
+/// The name of the colour an object truly has: its scenario's color_name when given (a colour
+/// drawn around a palette colour, as the wide scenes draw them), else NearestPaletteName of its
+/// albedo.
+std::string_view TrueColorName(const ObjectSpec& object);
 
 }  // namespace hgrasp::sim

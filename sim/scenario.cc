@@ -8,12 +8,12 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 #include "common/error.h"
@@ -127,9 +127,10 @@ class Parser : public yaml::Reader {
 ObjectSpec Parser::ParseObject(const YAML::Node& n, const std::string& field,
                                ObjectNodes* nodes) const {
   const Entries e = MapOf(
-      n, field, {"name", "shape", "size", "position", "yaw_deg", "color", "mass", "specular"},
-      "an object: a map with name, shape, size, position, color and optionally yaw_deg, mass, "
-      "specular");
+      n, field,
+      {"name", "shape", "size", "position", "yaw_deg", "color", "color_name", "mass", "specular"},
+      "an object: a map with name, shape, size, position, color and optionally yaw_deg, "
+      "color_name, mass, specular");
   ObjectSpec o;
   nodes->name = Require(e, n, field, "name", "an object name");
   o.name = Name(nodes->name, Join(field, "name"));
@@ -154,8 +155,8 @@ ObjectSpec Parser::ParseObject(const YAML::Node& n, const std::string& field,
   o.position_W = Numbers(nodes->position, Join(field, "position"), 2, pos_expected);
 
   if (const YAML::Node* yaw = Find(e, "yaw_deg")) {
-    const std::string yaw_expected = "a yaw about W z of -" + Fixed(kMaxYawDeg, 0) + " to " +
-                                     Fixed(kMaxYawDeg, 0) + " deg";
+    const std::string yaw_expected =
+        "a yaw about W z of -" + Fixed(kMaxYawDeg, 0) + " to " + Fixed(kMaxYawDeg, 0) + " deg";
     const double deg = Number(*yaw, Join(field, "yaw_deg"), yaw_expected);
     if (std::abs(deg) > kMaxYawDeg) Fail(*yaw, Join(field, "yaw_deg"), yaw_expected);
     o.yaw = DegToRad(deg);
@@ -169,9 +170,17 @@ ObjectSpec Parser::ParseObject(const YAML::Node& n, const std::string& field,
     Fail(color, color_field, color_expected);
   }
 
+  if (const YAML::Node* name = Find(e, "color_name")) {
+    const std::string expected =
+        "the colour's name, " + OneOf(Keys(kColorNames.begin(), kColorNames.end()));
+    o.color_name = Text(*name, Join(field, "color_name"), expected);
+    bool known = false;
+    for (std::string_view c : kColorNames) known = known || o.color_name == c;
+    if (!known) Fail(*name, Join(field, "color_name"), expected);
+  }
+
   if (const YAML::Node* mass = Find(e, "mass")) {
-    const std::string mass_expected = "a mass of " + Fixed(kMinMass, 2) + "-" +
-                                      Fixed(kMaxMass, 2) +
+    const std::string mass_expected = "a mass of " + Fixed(kMinMass, 2) + "-" + Fixed(kMaxMass, 2) +
                                       " kg (the Puma 260 with its hand lifts about 0.5 kg)";
     o.mass = Number(*mass, Join(field, "mass"), mass_expected);
     if (o.mass < kMinMass || o.mass > kMaxMass) Fail(*mass, Join(field, "mass"), mass_expected);
@@ -191,8 +200,8 @@ InterferenceSpec Parser::ParseInterference(const YAML::Node& n, const std::strin
   InterferenceSpec s;
   const std::string origin_expected =
       "the source position in W in m, as [x, y, z]: in the room (|x|, |y| <= " +
-      Fixed(kMaxInterferenceReach, 0) + " m) above the table top (0 < z <= " +
-      Fixed(kMaxInterferenceHeight, 0) + " m)";
+      Fixed(kMaxInterferenceReach, 0) +
+      " m) above the table top (0 < z <= " + Fixed(kMaxInterferenceHeight, 0) + " m)";
   const YAML::Node& origin = Require(e, n, field, "origin", origin_expected);
   s.origin_W = Numbers(origin, Join(field, "origin"), 3, origin_expected);
   if (std::abs(s.origin_W.x()) > kMaxInterferenceReach ||
@@ -224,9 +233,10 @@ InterferenceSpec Parser::ParseInterference(const YAML::Node& n, const std::strin
 }
 
 BoardSpec Parser::ParseBoard(const YAML::Node& n, const std::string& field) const {
-  const Entries e = MapOf(n, field, {"cols", "rows", "square_mm", "position", "yaw_deg", "tilt_deg"},
-                          "a chessboard: a map with cols, rows, square_mm, position and "
-                          "optionally yaw_deg, tilt_deg");
+  const Entries e =
+      MapOf(n, field, {"cols", "rows", "square_mm", "position", "yaw_deg", "tilt_deg"},
+            "a chessboard: a map with cols, rows, square_mm, position and "
+            "optionally yaw_deg, tilt_deg");
   BoardSpec b;
   const std::string corners_expected = "a whole number of inner corners, " +
                                        std::to_string(kMinBoardCorners) + "-" +
@@ -245,8 +255,8 @@ BoardSpec Parser::ParseBoard(const YAML::Node& n, const std::string& field) cons
          "a number of corners other than cols' (a square pattern has no orientation OpenCV can "
          "tell)");
   }
-  const std::string square_expected = "a square edge of " + Fixed(1e3 * kMinBoardSquare, 0) +
-                                      "-" + Fixed(1e3 * kMaxBoardSquare, 0) + " mm";
+  const std::string square_expected = "a square edge of " + Fixed(1e3 * kMinBoardSquare, 0) + "-" +
+                                      Fixed(1e3 * kMaxBoardSquare, 0) + " mm";
   const YAML::Node& square = Require(e, n, field, "square_mm", square_expected);
   b.square_m = 1e-3 * Number(square, Join(field, "square_mm"), square_expected);
   if (b.square_m < kMinBoardSquare - 1e-12 || b.square_m > kMaxBoardSquare + 1e-12) {
@@ -264,8 +274,8 @@ BoardSpec Parser::ParseBoard(const YAML::Node& n, const std::string& field) cons
     Fail(position, Join(field, "position"), pos_expected);
   }
   if (const YAML::Node* yaw = Find(e, "yaw_deg")) {
-    const std::string yaw_expected = "a yaw about W z of -" + Fixed(kMaxYawDeg, 0) + " to " +
-                                     Fixed(kMaxYawDeg, 0) + " deg";
+    const std::string yaw_expected =
+        "a yaw about W z of -" + Fixed(kMaxYawDeg, 0) + " to " + Fixed(kMaxYawDeg, 0) + " deg";
     const double deg = Number(*yaw, Join(field, "yaw_deg"), yaw_expected);
     if (std::abs(deg) > kMaxYawDeg) Fail(*yaw, Join(field, "yaw_deg"), yaw_expected);
     b.yaw = DegToRad(deg);
@@ -302,19 +312,17 @@ void Parser::CheckBoard(const Scenario& s, std::size_t i, const YAML::Node& n) c
           const Eigen::Vector3d p_O = o.X_WO().inverse() * p_W;
           if ((p_O.cwiseAbs().array() <= 0.5 * o.size_O.array() + 0.005).all()) {
             Fail(n["position"], field,
-                 "a board clear of every object by 5 mm (it reaches into " +
-                     Index("objects", j) + " '" + o.name + "')");
+                 "a board clear of every object by 5 mm (it reaches into " + Index("objects", j) +
+                     " '" + o.name + "')");
           }
         }
         for (std::size_t j = 0; j < i; ++j) {
           const BoardSpec& other = s.boards[j];
           const Eigen::Vector3d p_O = other.X_WB().inverse() * p_W;
           if (std::abs(p_O.x()) <= other.HalfExtent().x() &&
-              std::abs(p_O.y()) <= other.HalfExtent().y() && p_O.z() <= 0.005 &&
-              p_O.z() >= -0.01) {
+              std::abs(p_O.y()) <= other.HalfExtent().y() && p_O.z() <= 0.005 && p_O.z() >= -0.01) {
             Fail(n["position"], field,
-                 "a board clear of every other board (it reaches into " + Index("boards", j) +
-                     ")");
+                 "a board clear of every other board (it reaches into " + Index("boards", j) + ")");
           }
         }
       }
@@ -380,7 +388,8 @@ RobotErrorsSpec Parser::ParseRobotErrors(const YAML::Node& n, const std::string&
   for (const Value& v : values) keys.push_back(v.key);
   const Entries e = MapOf(n, field, keys,
                           "a map of robot errors, e.g. {enabled: false} or {arm_joint_zero_deg: "
-                          "0.2}: " + OneOf(keys));
+                          "0.2}: " +
+                              OneOf(keys));
   if (const YAML::Node* enabled = Find(e, "enabled")) {
     const std::optional<bool> b = ParseBool(*enabled);
     if (!b) Fail(*enabled, Join(field, "enabled"), "true or false" + QuoteHint(*enabled));
@@ -439,8 +448,7 @@ Scenario Parser::Parse(const std::string& text) {
   if (!root.IsMap()) Fail(root, "top level", top_expected);
   const Entries e = MapOf(root, "",
                           {"name", "seed", "camera_noise", "camera_samples", "lighting", "wall",
-                           "objects",
-                           "interference", "boards", "task", "robot_errors", "devices"},
+                           "objects", "interference", "boards", "task", "robot_errors", "devices"},
                           top_expected);
 
   Scenario s;
@@ -489,8 +497,8 @@ Scenario Parser::Parse(const std::string& text) {
 
   YAML::Node wall_x_node;
   if (const YAML::Node* wall = Find(e, "wall")) {
-    const std::string wall_expected = "a wall plane x in m, > " + Fixed(kMinWallX, 2) +
-                                      " and at most " + Fixed(kMaxWallX, 1);
+    const std::string wall_expected =
+        "a wall plane x in m, > " + Fixed(kMinWallX, 2) + " and at most " + Fixed(kMaxWallX, 1);
     const Entries we = MapOf(*wall, "wall", {"x"}, "a map such as {x: 0.9}");
     wall_x_node = Require(we, *wall, "wall", "x", wall_expected);
     s.wall_x = Number(wall_x_node, "wall.x", wall_expected);
@@ -537,7 +545,8 @@ Scenario Parser::Parse(const std::string& text) {
     s.robot_errors = ParseRobotErrors(*errors, "robot_errors");
   }
 
-  if (const YAML::Node* devices = Find(e, "devices")) s.devices = drivers::ParseDevices(*this, *devices);
+  if (const YAML::Node* devices = Find(e, "devices"))
+    s.devices = drivers::ParseDevices(*this, *devices);
 
   // Checks across fields.
   CheckAcrossObjects(s, object_nodes);
@@ -611,8 +620,9 @@ std::string ScenarioYaml(const Scenario& s) {
       << "    size: " << list({o.size_O.x(), o.size_O.y(), o.size_O.z()}) << "\n"
       << "    position: " << list({o.position_W.x(), o.position_W.y()}) << "\n"
       << "    yaw_deg: " << num(RadToDeg(o.yaw)) << "\n"
-      << "    color: " << list({o.color_rgb.x(), o.color_rgb.y(), o.color_rgb.z()}) << "\n"
-      << "    mass: " << num(o.mass) << "\n"
+      << "    color: " << list({o.color_rgb.x(), o.color_rgb.y(), o.color_rgb.z()}) << "\n";
+    if (!o.color_name.empty()) y << "    color_name: " << o.color_name << "\n";
+    y << "    mass: " << num(o.mass) << "\n"
       << "    specular: " << (o.specular ? "true" : "false") << "\n";
   }
   if (!s.interference.empty()) y << "interference:\n";
@@ -625,8 +635,7 @@ std::string ScenarioYaml(const Scenario& s) {
   for (const BoardSpec& b : s.boards) {
     y << "  - {cols: " << b.cols << ", rows: " << b.rows << ", square_mm: " << num(1e3 * b.square_m)
       << ", position: " << list({b.position_W.x(), b.position_W.y(), b.position_W.z()})
-      << ", yaw_deg: " << num(RadToDeg(b.yaw)) << ", tilt_deg: " << num(RadToDeg(b.tilt))
-      << "}\n";
+      << ", yaw_deg: " << num(RadToDeg(b.yaw)) << ", tilt_deg: " << num(RadToDeg(b.tilt)) << "}\n";
   }
   if (s.task) {
     y << "task:\n  target: {"
@@ -683,6 +692,39 @@ bool FootprintsOverlap(const std::array<Eigen::Vector2d, 4>& a,
         b_max = std::max(b_max, axis.dot(b[k]));
       }
       if (a_max <= b_min + kTouch || b_max <= a_min + kTouch) return false;
+    }
+  }
+  return true;
+}
+
+namespace {
+
+double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                            const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (a + t * ab - p).norm();
+}
+
+}  // namespace
+
+double FootprintDistance(const std::array<Eigen::Vector2d, 4>& a,
+                         const std::array<Eigen::Vector2d, 4>& b) {
+  if (FootprintsOverlap(a, b)) return 0.0;
+  double d = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 4; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      d = std::min(d, PointSegmentDistance(a[i], b[k], b[(k + 1) % 4]));
+      d = std::min(d, PointSegmentDistance(b[i], a[k], a[(k + 1) % 4]));
+    }
+  }
+  return d;
+}
+
+bool FootprintOnTable(const std::array<Eigen::Vector2d, 4>& f) {
+  for (const Eigen::Vector2d& c : f) {
+    if (c.x() < kTableMinX || c.x() > kTableMaxX || c.y() < kTableMinY || c.y() > kTableMaxY) {
+      return false;
     }
   }
   return true;

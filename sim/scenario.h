@@ -65,6 +65,10 @@ struct ObjectSpec {
   Eigen::Vector3d color_rgb = Eigen::Vector3d::Zero();   ///< RGB, each 0-1
   double mass = 0.2;                                     ///< kg, > 0
   bool specular = false;  ///< true: the surface mirrors the laser (spurious reflections)
+  /// The colour's name (one of kColorNames) that a person would give it: truth for the
+  /// pipeline's colour namer (YAML color_name). Empty: the palette colour nearest to color_rgb
+  /// (sim::TrueColorName).
+  std::string color_name;
 
   /// Pose of the box centre in W: translation (x, y, size_O.z / 2), rotation RotZ(yaw).
   Pose3 X_WO() const;
@@ -101,7 +105,7 @@ struct BoardSpec {
   int rows = 6;                                          ///< inner corners along B y
   double square_m = 0.025;                               ///< square edge (YAML square_mm)
   Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< the face centre in W (m)
-  double yaw = 0.0;   ///< rad about W z (YAML yaw_deg)
+  double yaw = 0.0;                                      ///< rad about W z (YAML yaw_deg)
   double tilt = 0.0;  ///< rad about the turned board's y axis (YAML tilt_deg); 0: face up
 
   /// X_WB = Translation(position_W) * RotZ(yaw) * RotY(tilt): at tilt -45 deg and yaw 0 the face
@@ -166,10 +170,10 @@ struct RobotErrorsSpec {
 
 /// A parsed and checked scenario file.
 struct Scenario {
-  std::string path;              ///< the file it came from (as given to LoadScenario)
-  std::string name;              ///< required
-  std::uint64_t seed = 0;        ///< every random draw in sim derives from it (DESIGN.md rule 6)
-  double camera_noise = 0.0;     ///< std. dev. of Gaussian pixel noise, grey levels 0-255, >= 0
+  std::string path;           ///< the file it came from (as given to LoadScenario)
+  std::string name;           ///< required
+  std::uint64_t seed = 0;     ///< every random draw in sim derives from it (DESIGN.md rule 6)
+  double camera_noise = 0.0;  ///< std. dev. of Gaussian pixel noise, grey levels 0-255, >= 0
   /// Samples a pixel of the twin's colour frames (1, 4, 9 or 16: 1x1 to 4x4 on a grid): a real
   /// camera integrates the light over each pixel, so an edge crossing it gives a grey between
   /// its two sides; one sample a pixel aliases every edge by up to half a pixel. (The stripe
@@ -195,9 +199,9 @@ Scenario LoadScenario(const std::string& path);
 
 /// The scenario as YAML text that ParseScenario reads back to the same values (each number in the
 /// shortest text that reads back to the same double; angles in degrees as the schema has them,
-/// so they come back within 1e-12 rad): for `hgrasp generate`, which writes the scenes of a family for users to read and
-/// keep. Throws std::invalid_argument when a device is not simulated (the devices block is
-/// written only empty: generated scenes run on the twin).
+/// so they come back within 1e-12 rad): for `hgrasp generate`, which writes the scenes of a family
+/// for users to read and keep. Throws std::invalid_argument when a device is not simulated (the
+/// devices block is written only empty: generated scenes run on the twin).
 std::string ScenarioYaml(const Scenario& scenario);
 
 /// The corners of an object's footprint on the table, in W (x, y), counter-clockwise.
@@ -207,6 +211,14 @@ std::array<Eigen::Vector2d, 4> ObjectFootprint(const ObjectSpec& o);
 /// footprints that merely touch (within 1 nm) do not.
 bool FootprintsOverlap(const std::array<Eigen::Vector2d, 4>& a,
                        const std::array<Eigen::Vector2d, 4>& b);
+
+/// Distance between two footprints (0 when their interiors overlap): for disjoint convex
+/// polygons the nearest points include a vertex of one of them.
+double FootprintDistance(const std::array<Eigen::Vector2d, 4>& a,
+                         const std::array<Eigen::Vector2d, 4>& b);
+
+/// Whether every corner of the footprint lies on the table top (kTableMinX..kTableMaxY).
+bool FootprintOnTable(const std::array<Eigen::Vector2d, 4>& f);
 
 /// Parses and checks scenario YAML text; `path_for_errors` names it in error messages and becomes
 /// Scenario::path. Throws hgrasp::InputError.

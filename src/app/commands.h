@@ -126,14 +126,19 @@ struct GenerateOptions {
   std::string out_dir;
 };
 
-/// Scene families `hgrasp generate` draws from: random_boxes is sim::RandomBoxScene.
-inline constexpr const char* kSceneFamilies[] = {"random_boxes"};
+/// Scene families `hgrasp generate` draws from: random_boxes is sim::RandomBoxScene, wide_boxes
+/// sim::WideBoxScene (drawn more widely: perturbed colours, close and near-square boxes, light,
+/// noise, other robots' stripes, walls).
+inline constexpr const char* kSceneFamilies[] = {"random_boxes", "wide_boxes"};
 /// Most scenes one `hgrasp generate` writes.
 inline constexpr std::uint64_t kMaxGenerate = 100000;
 
 /// Checks a family name and seed range (`--family`, `--seeds`).
 /// @throws hgrasp::InputError naming the option.
 void CheckFamily(const std::string& family, std::uint64_t first_seed, std::uint64_t last_seed);
+/// One scene of a (checked) family. The wide family's target is one the robot's model can grasp
+/// (grasp::PlanGrasp on the true boxes), drawn again until it is.
+sim::Scenario FamilyScenario(const std::string& family, std::uint64_t seed);
 /// The scenario file of one scene of a (checked) family: its YAML into *yaml; returns its name.
 std::string FamilyScene(const std::string& family, std::uint64_t seed, std::string* yaml);
 

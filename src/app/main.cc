@@ -276,7 +276,8 @@ int main(int argc, char** argv) {
       "generate",
       "Write the scenario files of a scene family over a seed range (DIR/<name>.yaml), to read, "
       "keep and run");
-  cmd_generate->add_option("--family", generate.family, "the scene family (random_boxes)");
+  cmd_generate->add_option("--family", generate.family,
+                           "the scene family (random_boxes, wide_boxes)");
   cmd_generate->add_option("--seeds", generate_seeds, "the seeds: N or FIRST..LAST (default 1)");
   cmd_generate->add_option("--out", generate.out_dir, "output directory")->required();
 
@@ -288,7 +289,8 @@ int main(int argc, char** argv) {
       "summary.json, summary.csv, junit.xml, report.html; baselines; resumes; Slurm");
   cmd_sweep->add_option("scenarios", sweep.inputs, "scenario files, or folders of them");
   CLI::Option* sweep_family = cmd_sweep->add_option(
-      "--family", sweep.family, "generated scenes of this family (random_boxes) with --seeds");
+      "--family", sweep.family,
+      "generated scenes of this family (random_boxes, wide_boxes) with --seeds");
   cmd_sweep->add_option("--seeds", sweep_seeds, "the generated scenes' seeds: N or FIRST..LAST");
   cmd_sweep->add_option("--stage", sweep.stage, "scan, model, plan or run (default run)");
   CLI::Option* sweep_out = cmd_sweep->add_option("--out", sweep.out_dir, "the sweep's folder");

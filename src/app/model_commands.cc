@@ -141,7 +141,7 @@ nlohmann::json LookTruth(const TruthWorld& truth_world, const task::TaskResult& 
   nlohmann::json matches = nlohmann::json::array();
   for (size_t i = 0; i < world.objects().size(); ++i) {
     const sim::SimObject& obj = world.objects()[i];
-    const std::string true_colour(sim::NearestPaletteName(obj.spec.color_rgb));
+    const std::string true_colour(sim::TrueColorName(obj.spec));
     const int k = match[i];
     nlohmann::json m = {{"object", obj.spec.name},
                         {"box", k < 0 ? nlohmann::json(nullptr) : nlohmann::json(k)},

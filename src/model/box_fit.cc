@@ -299,20 +299,15 @@ std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
     if (!(size[i] >= kMinEdgeM && size[i] <= kMaxEdgeM)) return std::nullopt;
   }
 
-  BoxModel box;
+  Pose3 X_WO = Pose3::Identity();
   Eigen::Matrix3d R_WO;
   R_WO.col(0) = n2;
   R_WO.col(1) = n3;
   R_WO.col(2) = n1;
-  box.X_WO.linear() = R_WO;
-  box.X_WO.translation() = 0.5 * (ext2->first + ext2->second) * n2 +
-                           0.5 * (ext3->first + ext3->second) * n3 + 0.5 * (lo1 + hi1) * n1;
-  box.size_O = size;
-  for (int k = 0; k < 8; ++k) {
-    const Vector3d corner_O(((k & 1) ? 0.5 : -0.5) * size.x(), ((k & 2) ? 0.5 : -0.5) * size.y(),
-                            ((k & 4) ? 0.5 : -0.5) * size.z());
-    box.vertices_W[k] = box.X_WO * corner_O;
-  }
+  X_WO.linear() = R_WO;
+  X_WO.translation() = 0.5 * (ext2->first + ext2->second) * n2 +
+                       0.5 * (ext3->first + ext3->second) * n3 + 0.5 * (lo1 + hi1) * n1;
+  BoxModel box = MakeBox(X_WO, size);
   box.regions.push_back(top->id);
   box.points = top->cells;
   if (side2 != nullptr) {
@@ -341,6 +336,19 @@ std::vector<BoxModel> FitBoxes(const segment::SegmentResult& s, const segment::G
   }
   if (failed != nullptr) *failed = fails;
   return boxes;
+}
+
+BoxModel MakeBox(const Pose3& X_WO, const Eigen::Vector3d& size_O) {
+  BoxModel box;
+  box.X_WO = X_WO;
+  box.size_O = size_O;
+  for (int k = 0; k < 8; ++k) {
+    const Vector3d corner_O(((k & 1) ? 0.5 : -0.5) * size_O.x(),
+                            ((k & 2) ? 0.5 : -0.5) * size_O.y(),
+                            ((k & 4) ? 0.5 : -0.5) * size_O.z());
+    box.vertices_W[k] = X_WO * corner_O;
+  }
+  return box;
 }
 
 }  // namespace hgrasp::model

@@ -43,6 +43,10 @@ struct BoxFitConfig {
   double min_top_fill = 0.85;
 };
 
+/// A box model from its pose and full edges (vertices_W filled; no regions, no points): e.g.
+/// a true box, to plan on what the scene holds.
+BoxModel MakeBox(const Pose3& X_WO, const Eigen::Vector3d& size_O);
+
 /// Fits a box to one object group (paper 5.2). The largest region of the group within
 /// max_face_angle_deg of horizontal is the top A1 (normal n1); the largest near-vertical region
 /// is the side A2, and the largest other near-vertical region nearly perpendicular to A2 (if any)

@@ -303,10 +303,7 @@ TEST(RandomSceneTest, EveryBoxIsVisibleToBothCamerasFromHome) {
     for (int cam : {kLeft, kRight}) {
       const cv::Mat& label = rig.View(cam).images.label;
       for (const SimObject& o : world.objects()) {
-        int pixels = 0;
-        for (int r = 0; r < label.rows; ++r) {
-          for (int c = 0; c < label.cols; ++c) pixels += label.at<int>(r, c) == o.geom;
-        }
+        const int pixels = testing::LabelPixels(label, o.geom);
         const std::string where =
             "seed " + std::to_string(seed) + " camera " + std::to_string(cam) + " " + o.spec.name;
         EXPECT_GE(pixels, kMinPixels) << where;

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <opencv2/core/mat.hpp>
 #include <string>
 
 #include "sim/scenario.h"
@@ -42,6 +43,15 @@ inline void SetJoint(World* world, const std::string& joint, double q) {
   const int a = mj_name2id(m, mjOBJ_ACTUATOR, joint.c_str());
   if (a >= 0) world->data()->ctrl[a] = q;
   mj_forward(world->model(), world->data());
+}
+
+/// Pixels of a label image (CV_32S) that show geom `geom`.
+inline int LabelPixels(const cv::Mat& label, int geom) {
+  int pixels = 0;
+  for (int r = 0; r < label.rows; ++r) {
+    for (int c = 0; c < label.cols; ++c) pixels += label.at<int>(r, c) == geom;
+  }
+  return pixels;
 }
 
 /// An empty scene: no objects, noise 0.
