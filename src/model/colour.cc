@@ -1,6 +1,7 @@
 #include "model/colour.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_set>
 
@@ -47,6 +48,71 @@ constexpr std::array<HueSector, 7> kHueSectors = {{
 }};
 constexpr int kRed = 0, kWhite = 7, kGrey = 8, kBlack = 9;
 
+// BoxColour against the table. A region is the top (lit as the table is) when its normal is
+// this near vertical.
+constexpr double kHorizontalMinNz = 0.95;
+// A balanced sample darker than this is achromatic: noise of 3 grey levels on the darkest
+// chromatic albedo seen (0.2) is a saturation error of 0.1, on a black side of 0.05 of 0.3.
+constexpr float kBalancedDarkValue = 0.10f;
+// Lightness bounds of an achromatic box (balanced value of its top): the midpoints between the
+// names' albedos, black 0.08-0.22, grey 0.40-0.60, white 0.82-0.97.
+constexpr float kBlackMaxLightness = 0.31f;
+constexpr float kWhiteMinLightness = 0.71f;
+// A reference channel below this (a table in the dark) is not divided by.
+constexpr float kMinReference = 0.02f;
+
+int HueIndex(const Eigen::Vector3f& rgb);
+
+// The valid cells' colours of the given regions.
+std::vector<Eigen::Vector3f> CellColours(const segment::SegmentResult& s,
+                                         const std::vector<int>& region_ids,
+                                         const scan::RangeImage& range) {
+  HGRASP_DEMAND(s.rows == range.rows() && s.cols == range.cols());
+  HGRASP_DEMAND(static_cast<int>(s.labels.size()) == s.rows * s.cols);
+  const std::unordered_set<int> ids(region_ids.begin(), region_ids.end());
+  std::vector<Eigen::Vector3f> rgb;
+  for (int r = 0; r < s.rows; ++r) {
+    for (int c = 0; c < s.cols; ++c) {
+      const int label = s.labels[r * s.cols + c];
+      if (label < 0 || !ids.contains(label)) continue;
+      const scan::RangeCell& cell = range.at(r, c);
+      if (cell.valid) rgb.push_back(cell.rgb);
+    }
+  }
+  return rgb;
+}
+
+// A white-balanced sample (albedo as if lit as the table): kGrey for every achromatic one, else
+// its hue sector.
+int BalancedIndex(const Eigen::Vector3f& albedo) {
+  const float value = albedo.maxCoeff();
+  if (!(value >= kBalancedDarkValue)) return kGrey;  // also NaN
+  if ((value - albedo.minCoeff()) / value < kAchromaticMaxSaturation) return kGrey;
+  return HueIndex(albedo);
+}
+
+// White, grey or black by the lightness of the box's top face (or brightest face).
+int LightnessName(const segment::SegmentResult& s, const std::vector<int>& region_ids,
+                  const scan::RangeImage& range, const Eigen::Vector3f& gain) {
+  float lightness = -1.0f;
+  bool best_is_top = false;
+  for (const segment::PlaneRegion& region : s.regions) {
+    if (std::find(region_ids.begin(), region_ids.end(), region.id) == region_ids.end()) continue;
+    std::vector<Eigen::Vector3f> rgb = CellColours(s, {region.id}, range);
+    if (rgb.empty()) continue;
+    for (Eigen::Vector3f& c : rgb) c = c.cwiseProduct(gain);
+    const float value = MedianColour(rgb).maxCoeff();
+    const bool top = std::abs(region.normal_W.z()) > kHorizontalMinNz;
+    // A top face wins over any side; among tops, or among sides, the brighter.
+    if ((top && !best_is_top) || (top == best_is_top && value > lightness)) {
+      lightness = value;
+      best_is_top = top;
+    }
+  }
+  if (lightness < kBlackMaxLightness) return kBlack;
+  return lightness > kWhiteMinLightness ? kWhite : kGrey;
+}
+
 }  // namespace
 
 int ColourNameIndex(std::string_view name) {
@@ -66,6 +132,15 @@ int ColourIndex(const Eigen::Vector3f& rgb) {
   if (chroma / value < kAchromaticMaxSaturation) {
     return value > kWhiteMinValue ? kWhite : kGrey;
   }
+  return HueIndex(Eigen::Vector3f(r, g, b));
+}
+
+namespace {
+
+int HueIndex(const Eigen::Vector3f& rgb) {
+  const float r = rgb.x(), g = rgb.y(), b = rgb.z();
+  const float value = std::max({r, g, b});
+  const float chroma = value - std::min({r, g, b});
   float hue_deg;
   if (value == r) {
     hue_deg = 60.0f * (g - b) / chroma;
@@ -80,6 +155,8 @@ int ColourIndex(const Eigen::Vector3f& rgb) {
   }
   return kRed;  // [340, 360)
 }
+
+}  // namespace
 
 std::string_view ColourSummary::name() const {
   if (name_index < 0 || name_index >= kNumColours) return "";
@@ -124,21 +201,49 @@ ColourSummary SummariseColour(const std::vector<Eigen::Vector3f>& rgb) {
   return out;
 }
 
-ColourSummary BoxColour(const segment::SegmentResult& s, const std::vector<int>& region_ids,
-                        const scan::RangeImage& range) {
-  HGRASP_DEMAND(s.rows == range.rows() && s.cols == range.cols());
-  HGRASP_DEMAND(static_cast<int>(s.labels.size()) == s.rows * s.cols);
-  const std::unordered_set<int> ids(region_ids.begin(), region_ids.end());
-  std::vector<Eigen::Vector3f> rgb;
-  for (int r = 0; r < s.rows; ++r) {
-    for (int c = 0; c < s.cols; ++c) {
-      const int label = s.labels[r * s.cols + c];
-      if (label < 0 || !ids.contains(label)) continue;
-      const scan::RangeCell& cell = range.at(r, c);
-      if (cell.valid) rgb.push_back(cell.rgb);
-    }
+std::optional<Eigen::Vector3f> TableColour(const segment::SegmentResult& s,
+                                           const std::vector<int>& floor_or_wall,
+                                           const scan::RangeImage& range) {
+  std::vector<int> floors;
+  for (const segment::PlaneRegion& region : s.regions) {
+    const bool listed =
+        std::find(floor_or_wall.begin(), floor_or_wall.end(), region.id) != floor_or_wall.end();
+    if (listed && std::abs(region.normal_W.z()) > kHorizontalMinNz) floors.push_back(region.id);
   }
-  return SummariseColour(rgb);
+  const std::vector<Eigen::Vector3f> rgb = CellColours(s, floors, range);
+  if (rgb.empty()) return std::nullopt;
+  return MedianColour(rgb);
+}
+
+ColourSummary BoxColour(const segment::SegmentResult& s, const std::vector<int>& region_ids,
+                        const scan::RangeImage& range,
+                        const std::optional<Eigen::Vector3f>& table_rgb) {
+  if (!table_rgb) return SummariseColour(CellColours(s, region_ids, range));
+  const Eigen::Vector3f gain = kTableAlbedo * table_rgb->cwiseMax(kMinReference).cwiseInverse();
+  const std::vector<Eigen::Vector3f> rgb = CellColours(s, region_ids, range);
+  std::vector<int> index(rgb.size());
+  std::array<int, kNumColours> votes{};
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    index[i] = BalancedIndex(rgb[i].cwiseProduct(gain));
+    ++votes[index[i]];
+  }
+  ColourSummary out;
+  out.samples = static_cast<int>(rgb.size());
+  if (rgb.empty()) return out;
+  // kGrey stands for every achromatic sample until the box's lightness names them.
+  const int winner = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+  const int achromatic_name = winner == kGrey ? LightnessName(s, region_ids, range, gain) : kGrey;
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    if (index[i] == kGrey) index[i] = achromatic_name;
+    ++out.histogram[index[i]];
+  }
+  out.name_index = winner == kGrey ? achromatic_name : winner;
+  std::vector<Eigen::Vector3f> winners;
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    if (index[i] == out.name_index) winners.push_back(rgb[i]);
+  }
+  out.rgb = MedianColour(winners);
+  return out;
 }
 
 std::optional<int> ChooseByColour(const std::vector<ColourSummary>& colours,

@@ -63,11 +63,35 @@ struct ColourSummary {
 /// Histogram of the samples' ColourIndex, the winning bin and its median colour.
 ColourSummary SummariseColour(const std::vector<Eigen::Vector3f>& rgb);
 
-/// The colour of a box from the range cells of its regions: SummariseColour over the valid cells
-/// whose segment label is one of region_ids (unknown ids match no cell). s must come from
-/// segment::SegmentPlanes on range (aborts on a size mismatch).
+/// The albedo of the table (the paper's white table): the white reference's true lightness.
+inline constexpr float kTableAlbedo = 0.85f;
+
+/// The table as the cameras see it, the white reference of BoxColour: the per-channel median of
+/// the valid cells of the horizontal regions (|n.z| > 0.95) among floor_or_wall
+/// (segment::Grouping); nullopt when there are none.
+std::optional<Eigen::Vector3f> TableColour(const segment::SegmentResult& s,
+                                           const std::vector<int>& floor_or_wall,
+                                           const scan::RangeImage& range);
+
+/// The colour of a box from the range cells of its regions (unknown ids match no cell). s must
+/// come from segment::SegmentPlanes on range (aborts on a size mismatch).
+///
+/// Without a table reference: SummariseColour over those cells (ColourIndex's fixed thresholds,
+/// which hold only for the light they were set in).
+///
+/// With the table's colour (TableColour) as the white reference, whatever the light: each
+/// sample is white-balanced and scaled to the albedo it would have lit as the table is
+/// (rgb / table_rgb x kTableAlbedo, per channel). A balanced sample darker than 0.10 or with
+/// saturation under 0.25 is achromatic; else its hue sector (ColourIndex's) names it. The most
+/// frequent of the seven hue names and "achromatic" wins; an achromatic box is then named by its
+/// lightness, the median balanced value of its top face (the horizontal region lit as the table
+/// is; the brightest region when none is horizontal, since side faces are lit less): black under
+/// 0.31, white above 0.71, grey between (the midpoints between the names' albedos: black
+/// 0.08-0.22, grey 0.40-0.60, white 0.82-0.97). The histogram counts the achromatic samples
+/// under that name.
 ColourSummary BoxColour(const segment::SegmentResult& s, const std::vector<int>& region_ids,
-                        const scan::RangeImage& range);
+                        const scan::RangeImage& range,
+                        const std::optional<Eigen::Vector3f>& table_rgb = std::nullopt);
 
 /// Per-channel median (RGB) of samples, zero when empty; an even count averages the middle two.
 Eigen::Vector3f MedianColour(const std::vector<Eigen::Vector3f>& rgb);

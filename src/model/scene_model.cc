@@ -16,9 +16,10 @@ SceneModel ModelScene(const scan::RangeImage& range, const SceneModelConfig& con
   m.segment_s = seconds_since(t);
   t = Clock::now();
   m.boxes = FitBoxes(m.segments, m.groups, range, &m.unfitted, config.box_fit);
+  m.table_rgb = TableColour(m.segments, m.groups.floor_or_wall, range);
   for (const BoxModel& box : m.boxes) {
     m.textures.push_back(MakeFaceTextures(box, m.segments, range, config.texture_size));
-    m.colours.push_back(BoxColour(m.segments, box.regions, range));
+    m.colours.push_back(BoxColour(m.segments, box.regions, range, m.table_rgb));
   }
   m.model_s = seconds_since(t);
   return m;

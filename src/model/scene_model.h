@@ -2,6 +2,7 @@
 /// @file From a range image to named, textured box models: the segment/ and model/ stages in
 /// order (Taylor & Kleeman, sections 5.1, 5.2 and 6).
 
+#include <optional>
 #include <vector>
 
 #include "model/box_fit.h"
@@ -23,6 +24,8 @@ struct SceneModel {
   segment::SegmentResult segments;
   segment::Grouping groups;
   std::vector<BoxModel> boxes;
+  /// The table's colour, the white reference of the boxes' colours (nullopt: no table seen).
+  std::optional<Eigen::Vector3f> table_rgb;
   std::vector<ColourSummary> colours;              ///< per box
   std::vector<std::vector<FaceTexture>> textures;  ///< per box, its visible faces
   int unfitted = 0;      ///< object groups no box could be fitted to (FitBox failed)

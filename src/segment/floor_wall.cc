@@ -1,6 +1,7 @@
 #include "segment/floor_wall.h"
 
 #include <cmath>
+#include <limits>
 
 namespace hgrasp::segment {
 namespace {
@@ -25,30 +26,32 @@ int Least(const std::vector<PlaneRegion>& regions, const std::vector<char>& gone
   return least;
 }
 
-/// Floor: the lowest remaining region, horizontal, all others well above. Removes it with the
-/// horizontal regions at its height; returns whether it found one.
+/// Floor: the lowest remaining horizontal region, no other region's centroid more than the
+/// clearance below it. Removes it with every region whose centroid lies within the clearance of
+/// its height, whatever its normal; returns whether it found one.
 bool RemoveFloor(const std::vector<PlaneRegion>& regions, Removed* removed,
                  std::vector<int>* floor_or_wall) {
   const int n = static_cast<int>(regions.size());
   std::vector<char>& gone = removed->region;
-  const int lowest = Least(regions, gone, [](const PlaneRegion& r) { return r.centroid_W.z(); });
+  const int lowest = Least(regions, gone, [](const PlaneRegion& r) {
+    return std::abs(r.normal_W.z()) > kFloorNz ? r.centroid_W.z()
+                                               : std::numeric_limits<double>::infinity();
+  });
   if (lowest < 0 || !(std::abs(regions[lowest].normal_W.z()) > kFloorNz)) return false;
-  // Horizontal regions at its height are pieces of the same plane (a line of missing cells can
-  // split the table): removed with it.
+  // Regions at its height are pieces of the same plane: a line of missing cells can split the
+  // table, and a strip of it along a box's foot or the scan's edge, fitted to few or mixed
+  // points, can come out tilted. No box face lies that low: a side's centroid is half its
+  // box's height up, and a box under 2 clearances tall is below what the scan resolves.
   const double z0 = regions[lowest].centroid_W.z();
   auto same_plane = [&](int k) {
-    return std::abs(regions[k].normal_W.z()) > kFloorNz &&
-           regions[k].centroid_W.z() < z0 + kFloorClearance;
+    return std::abs(regions[k].centroid_W.z() - z0) < kFloorClearance;
   };
   bool below_all = true;
   for (int k = 0; k < n; ++k) {
-    if (k != lowest && !gone[k] && !same_plane(k) &&
-        regions[k].centroid_W.z() < z0 + kFloorClearance) {
-      below_all = false;
-    }
+    if (!gone[k] && regions[k].centroid_W.z() <= z0 - kFloorClearance) below_all = false;
   }
   for (const double z : removed->floor_z) {
-    if (regions[lowest].centroid_W.z() > z + kFloorClearance) below_all = false;
+    if (z0 > z + kFloorClearance) below_all = false;
   }
   if (!below_all) return false;
   removed->floor_z.push_back(z0);

@@ -37,8 +37,8 @@ void CheckConfig(const SegmentConfig& c) {
     bad("max_patch_residual_m2", c.max_patch_residual_m2, "> 0");
   if (!(c.alpha1 > -1.0 && c.alpha1 < 1.0)) bad("alpha1", c.alpha1, "in (-1, 1)");
   if (!(c.alpha2 > 0.0 && c.alpha2 <= 1.0)) bad("alpha2", c.alpha2, "in (0, 1]");
-  if (!(c.max_merge_residual_m2 >= 0.0))
-    bad("max_merge_residual_m2", c.max_merge_residual_m2, ">= 0");
+  if (!(c.max_merge_residual_m2 >= 0.0 && std::isfinite(c.max_merge_residual_m2)))
+    bad("max_merge_residual_m2", c.max_merge_residual_m2, ">= 0 and finite");
   if (c.min_region_cells < 1) bad("min_region_cells", c.min_region_cells, ">= 1");
   if (!(c.max_neighbour_gap_m > 0.0)) bad("max_neighbour_gap_m", c.max_neighbour_gap_m, "> 0");
 }

@@ -82,10 +82,11 @@ struct Grouping {
   std::vector<std::vector<int>> objects;  ///< region ids per object group (ascending)
 };
 
-/// Floor and wall removal (paper 5.1): repeatedly, a horizontal region (|n.z| > 0.95) whose
-/// centroid is lowest, with every other remaining region's centroid at least 5 mm above it
-/// (horizontal regions within 5 mm of its height are pieces of the same plane and go with it),
-/// and none above an earlier floor's by more than 5 mm, is a floor (a plane below all other planes,
+/// Floor and wall removal (paper 5.1): repeatedly, the horizontal region (|n.z| > 0.95) whose
+/// centroid is lowest, with no other remaining region's centroid 5 mm or more below it (regions
+/// of any normal whose centroid is within 5 mm of its height are pieces of the same plane, such
+/// as a strip of the table fitted tilted, and go with it), and none above an earlier floor's by
+/// more than 5 mm, is a floor (a plane below all other planes,
 /// the removed ones included: a lone box top left over the table is no second floor); a vertical
 /// region (|n.z| < 0.1) with the largest centroid x, every other remaining region's centroid at
 /// least 2 cm nearer in x and not more than 2 cm nearer than an earlier wall's, is a wall;

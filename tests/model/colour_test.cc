@@ -164,6 +164,76 @@ TEST(BoxColour, CountsOnlyValidCellsOfTheGivenRegions) {
   EXPECT_EQ(BoxColour(s, {}, range).samples, 0);
 }
 
+// A scene of three regions on a 6 x 6 grid: the table (region 1, horizontal, rows 0-1), a box's
+// top (region 2, horizontal, rows 2-3) and its side (region 3, vertical, rows 4-5), each cell the
+// albedo times the light its face gets (the top as the table, the side `side_light`), plus a
+// deterministic +-noise per channel.
+struct LitBox {
+  scan::RangeImage range{6, 6};
+  segment::SegmentResult s;
+
+  LitBox(const Vector3f& box_albedo, float light, float side_light, float noise) {
+    s.rows = s.cols = 6;
+    s.labels.assign(36, -1);
+    const Vector3f table_albedo(kTableAlbedo, kTableAlbedo, kTableAlbedo * 0.96f);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) {
+        const int id = 1 + r / 2;
+        const Vector3f albedo = id == 1 ? table_albedo : box_albedo;
+        const float lit = id == 3 ? side_light : light;
+        const float e = ((r * 6 + c) % 3 - 1) * noise;  // -noise, 0, +noise
+        scan::RangeCell& cell = range.at(r, c);
+        cell.valid = true;
+        cell.rgb = (albedo * lit + Vector3f(e, -e, e)).cwiseMax(0.0f).cwiseMin(1.0f);
+        s.labels[r * 6 + c] = id;
+      }
+    }
+    for (int id : {1, 2, 3}) {
+      segment::PlaneRegion region;
+      region.id = id;
+      region.normal_W = id == 3 ? Eigen::Vector3d(-1, 0, 0) : Eigen::Vector3d(0, 0, 1);
+      s.regions.push_back(region);
+    }
+  }
+  std::string Name(bool against_table) const {
+    const std::optional<Vector3f> table = TableColour(s, {1}, range);
+    return std::string(BoxColour(s, {2, 3}, range, against_table ? table : std::nullopt).name());
+  }
+};
+
+TEST(TableColour, TheMedianOfTheHorizontalFloorCells) {
+  const LitBox scene(Vector3f(0.5f, 0.5f, 0.5f), 0.6f, 0.3f, 0.0f);
+  const std::optional<Vector3f> table = TableColour(scene.s, {1, 3}, scene.range);  // 3: a wall
+  ASSERT_TRUE(table.has_value());
+  EXPECT_TRUE(table->isApprox(Vector3f(0.51f, 0.51f, 0.4896f), 1e-5f)) << table->transpose();
+  EXPECT_EQ(TableColour(scene.s, {3}, scene.range), std::nullopt);  // no horizontal one
+  EXPECT_EQ(TableColour(scene.s, {}, scene.range), std::nullopt);
+}
+
+// Issue 37's failure family: a white box named grey in dim light, a grey one named white in
+// bright light (the fixed thresholds on the value). Against the table, each is named what it is,
+// whatever the light.
+TEST(BoxColour, AchromaticBoxesAreNamedByTheirTopAgainstTheTable) {
+  const LitBox white_dim(Vector3f(0.84f, 0.84f, 0.86f), 0.5f, 0.25f, 0.01f);
+  EXPECT_EQ(white_dim.Name(false), "grey");  // the fixed thresholds' failure
+  EXPECT_EQ(white_dim.Name(true), "white");
+  const LitBox grey_bright(Vector3f(0.58f, 0.6f, 0.59f), 0.95f, 0.5f, 0.01f);
+  EXPECT_EQ(grey_bright.Name(false), "white");
+  EXPECT_EQ(grey_bright.Name(true), "grey");
+  // A black box with a faint blue-green tint in bright light, its dark side noisy.
+  EXPECT_EQ(LitBox(Vector3f(0.16f, 0.19f, 0.2f), 1.0f, 0.35f, 0.03f).Name(true), "black");
+  for (float light : {0.4f, 0.6f, 0.8f, 1.0f}) {
+    for (const auto& [albedo, name] : {std::pair{Vector3f(0.92f, 0.92f, 0.9f), "white"},
+                                       {Vector3f(0.5f, 0.5f, 0.5f), "grey"},
+                                       {Vector3f(0.15f, 0.15f, 0.15f), "black"},
+                                       {Vector3f(0.85f, 0.1f, 0.1f), "red"},
+                                       {Vector3f(0.15f, 0.3f, 0.85f), "blue"}}) {
+      EXPECT_EQ(LitBox(albedo, light, 0.5f * light, 0.01f).Name(true), name)
+          << "light " << light << ": " << albedo.transpose();
+    }
+  }
+}
+
 TEST(ChooseByColour, TheBoxOfThatColourWithTheMostSamples) {
   auto summary = [](int name_index, int count) {
     ColourSummary c;

@@ -46,16 +46,32 @@ TEST(RemoveFloorsAndWalls, PiecesAtTheFloorsHeightGoWithIt) {
   EXPECT_EQ(removed_ids, (std::vector<int>{0, 1}));
 }
 
-TEST(RemoveFloorsAndWalls, NoFloorWhenSomethingNonHorizontalIsTooLow) {
-  // A face whose centroid is 3 mm above the lowest horizontal region: that is no floor below all
+TEST(RemoveFloorsAndWalls, NoFloorWhenSomethingIsBelowIt) {
+  // A face whose centroid is 6 mm below the lowest horizontal region: that is no floor below all
   // other planes.
   const std::vector<PlaneRegion> regions = {
       Region(0, kUp, {0.3, 0.0, 0.0}),
-      Region(1, kFacing, {0.3, 0.1, 0.003}),
+      Region(1, kFacing, {0.3, 0.1, -0.006}),
   };
   std::vector<int> removed_ids;
   EXPECT_EQ(RemoveFloorsAndWalls(regions, &removed_ids), (std::vector<char>{0, 0}));
   EXPECT_TRUE(removed_ids.empty());
+}
+
+// Issue 37 (wide_19, wide_12 of the wide family): a strip of the table fitted tilted (n.z 0.90,
+// its centroid at the table's height) or a face 3 mm up kept the table from being the floor, and
+// every box joined it in one object. Now they are pieces of the floor.
+TEST(RemoveFloorsAndWalls, TiltedPiecesAtTheTablesHeightGoWithTheFloor) {
+  const std::vector<PlaneRegion> regions = {
+      Region(0, kUp, {0.41, 0.0, 0.0}),                           // the table
+      Region(1, Vector3d(-0.09, 0.43, 0.90), {0.48, 0.32, 0.0}),  // a strip of it, tilted
+      Region(2, kFacing, {0.3, 0.1, 0.003}),                      // 3 mm up, facing the robot
+      Region(3, kUp, {0.37, 0.0, 0.115}),                         // a box top
+      Region(4, kFacing, {0.34, 0.0, 0.06}),                      // its side
+  };
+  std::vector<int> removed_ids;
+  EXPECT_EQ(RemoveFloorsAndWalls(regions, &removed_ids), (std::vector<char>{1, 1, 1, 0, 0}));
+  EXPECT_EQ(removed_ids, (std::vector<int>{0, 1, 2}));
 }
 
 TEST(RemoveFloorsAndWalls, TiltedLowestRegionIsNoFloor) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "common/error.h"
@@ -267,6 +268,11 @@ TEST(SegmentPlanes, InvalidConfigThrows) {
   EXPECT_THROW(SegmentPlanes(img, config), InputError);
   config = {};
   config.max_neighbour_gap_m = 0;
+  EXPECT_THROW(SegmentPlanes(img, config), InputError);
+  // An infinite merge limit let a region with no neighbour into the merge queue, which then read
+  // its missing partner out of bounds (found by AddressSanitizer): refused.
+  config = {};
+  config.max_merge_residual_m2 = std::numeric_limits<double>::infinity();
   EXPECT_THROW(SegmentPlanes(img, config), InputError);
 }
 
