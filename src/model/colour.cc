@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "common/error.h"
@@ -63,22 +64,34 @@ constexpr float kMinReference = 0.02f;
 
 int HueIndex(const Eigen::Vector3f& rgb);
 
-// The valid cells' colours of the given regions.
-std::vector<Eigen::Vector3f> CellColours(const segment::SegmentResult& s,
-                                         const std::vector<int>& region_ids,
-                                         const scan::RangeImage& range) {
+// A valid cell of one of a box's regions: the region's id and the cell's colour.
+struct Sample {
+  int region;
+  Eigen::Vector3f rgb;
+};
+
+// The valid cells of the given regions, in raster order.
+std::vector<Sample> CellSamples(const segment::SegmentResult& s, const std::vector<int>& region_ids,
+                                const scan::RangeImage& range) {
   HGRASP_DEMAND(s.rows == range.rows() && s.cols == range.cols());
   HGRASP_DEMAND(static_cast<int>(s.labels.size()) == s.rows * s.cols);
   const std::unordered_set<int> ids(region_ids.begin(), region_ids.end());
-  std::vector<Eigen::Vector3f> rgb;
+  std::vector<Sample> samples;
   for (int r = 0; r < s.rows; ++r) {
     for (int c = 0; c < s.cols; ++c) {
       const int label = s.labels[r * s.cols + c];
       if (label < 0 || !ids.contains(label)) continue;
       const scan::RangeCell& cell = range.at(r, c);
-      if (cell.valid) rgb.push_back(cell.rgb);
+      if (cell.valid) samples.push_back({label, cell.rgb});
     }
   }
+  return samples;
+}
+
+std::vector<Eigen::Vector3f> Colours(const std::vector<Sample>& samples) {
+  std::vector<Eigen::Vector3f> rgb;
+  rgb.reserve(samples.size());
+  for (const Sample& x : samples) rgb.push_back(x.rgb);
   return rgb;
 }
 
@@ -91,17 +104,18 @@ int BalancedIndex(const Eigen::Vector3f& albedo) {
   return HueIndex(albedo);
 }
 
-// White, grey or black by the lightness of the box's top face (or brightest face).
-int LightnessName(const segment::SegmentResult& s, const std::vector<int>& region_ids,
-                  const scan::RangeImage& range, const Eigen::Vector3f& gain) {
+// White, grey or black by the lightness of the box's top face (or brightest face), from the
+// box's samples.
+int LightnessName(const segment::SegmentResult& s, const std::vector<Sample>& samples,
+                  const Eigen::Vector3f& gain) {
+  std::unordered_map<int, std::vector<Eigen::Vector3f>> balanced;  // per region
+  for (const Sample& x : samples) balanced[x.region].push_back(x.rgb.cwiseProduct(gain));
   float lightness = -1.0f;
   bool best_is_top = false;
   for (const segment::PlaneRegion& region : s.regions) {
-    if (std::find(region_ids.begin(), region_ids.end(), region.id) == region_ids.end()) continue;
-    std::vector<Eigen::Vector3f> rgb = CellColours(s, {region.id}, range);
-    if (rgb.empty()) continue;
-    for (Eigen::Vector3f& c : rgb) c = c.cwiseProduct(gain);
-    const float value = MedianColour(rgb).maxCoeff();
+    const auto found = balanced.find(region.id);
+    if (found == balanced.end()) continue;
+    const float value = MedianColour(found->second).maxCoeff();
     const bool top = std::abs(region.normal_W.z()) > kHorizontalMinNz;
     // A top face wins over any side; among tops, or among sides, the brighter.
     if ((top && !best_is_top) || (top == best_is_top && value > lightness)) {
@@ -210,7 +224,7 @@ std::optional<Eigen::Vector3f> TableColour(const segment::SegmentResult& s,
         std::find(floor_or_wall.begin(), floor_or_wall.end(), region.id) != floor_or_wall.end();
     if (listed && std::abs(region.normal_W.z()) > kHorizontalMinNz) floors.push_back(region.id);
   }
-  const std::vector<Eigen::Vector3f> rgb = CellColours(s, floors, range);
+  const std::vector<Eigen::Vector3f> rgb = Colours(CellSamples(s, floors, range));
   if (rgb.empty()) return std::nullopt;
   return MedianColour(rgb);
 }
@@ -218,9 +232,10 @@ std::optional<Eigen::Vector3f> TableColour(const segment::SegmentResult& s,
 ColourSummary BoxColour(const segment::SegmentResult& s, const std::vector<int>& region_ids,
                         const scan::RangeImage& range,
                         const std::optional<Eigen::Vector3f>& table_rgb) {
-  if (!table_rgb) return SummariseColour(CellColours(s, region_ids, range));
+  const std::vector<Sample> samples = CellSamples(s, region_ids, range);
+  const std::vector<Eigen::Vector3f> rgb = Colours(samples);
+  if (!table_rgb) return SummariseColour(rgb);
   const Eigen::Vector3f gain = kTableAlbedo * table_rgb->cwiseMax(kMinReference).cwiseInverse();
-  const std::vector<Eigen::Vector3f> rgb = CellColours(s, region_ids, range);
   std::vector<int> index(rgb.size());
   std::array<int, kNumColours> votes{};
   for (size_t i = 0; i < rgb.size(); ++i) {
@@ -232,7 +247,7 @@ ColourSummary BoxColour(const segment::SegmentResult& s, const std::vector<int>&
   if (rgb.empty()) return out;
   // kGrey stands for every achromatic sample until the box's lightness names them.
   const int winner = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
-  const int achromatic_name = winner == kGrey ? LightnessName(s, region_ids, range, gain) : kGrey;
+  const int achromatic_name = winner == kGrey ? LightnessName(s, samples, gain) : kGrey;
   for (size_t i = 0; i < rgb.size(); ++i) {
     if (index[i] == kGrey) index[i] = achromatic_name;
     ++out.histogram[index[i]];
