@@ -67,6 +67,14 @@ std::string FirstError(const std::string& output) {
   return "";
 }
 
+// An execution in the answer to a byte other than the CR whose output is neither empty nor a
+// message: a line run by a damaged byte (a ^R or a character damaged into CR) prints nothing (the
+// command, an empty line) or a message (anything else). So these are late bytes of an earlier
+// exchange, a WHERE report, say: nothing known ran.
+bool UnexplainedOutput(const std::string& sent, const val2::Reaction& r) {
+  return sent != std::string(1, val2::kCr) && !r.text.empty() && FirstError(r.text).empty();
+}
+
 // Two WHERE locations of a tool at rest: within a tenth of the check's thresholds (moved_mm,
 // moved_turn_deg at their defaults), more than WHERE's last digits and an arm's creep between two
 // reads (still_deg at 0.45 m: 0.08 mm), less than a corrupted digit of the tenths or above.
@@ -550,9 +558,12 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       cancel_trace = execution_trace = message_trace = false;  // armed just now
     }
     const Status s = Step(send, expected, timeout, call, &r, &ran);
+    // Late bytes of an earlier exchange read as an execution (see UnexplainedOutput).
+    const bool foreign = s == Status::kOk && r.kind == Reaction::Kind::kExecuted && armed &&
+                         state_changing && UnexplainedOutput(send, r);
     // The second look at a line found gone only asks whether it is still there: a damaged
     // answer to it ("^R" CR LF "." one byte off is a cancel's echo) is no trace of a cancel.
-    if (armed && !gone_once) {
+    if (armed && !gone_once && !foreign) {
       cancel_trace |= saw_cancel_;
       execution_trace |= saw_execution_;
       message_trace |= saw_message_;
@@ -573,6 +584,24 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
     // below); otherwise it is taken as not run.
     if (r.kind == Reaction::Kind::kCancel && !(armed && check_motion) && !gone_once) armed = false;
     if (r.kind != Reaction::Kind::kExecuted) continue;
+    if (armed && gone_once) {
+      // The second look at a line found gone ran what was left there (a ^R damaged into CR: an
+      // empty line, or stray characters): it says nothing of the command, and the line is still
+      // gone. Decided as the line found gone twice. (Bug fix, creeping-rest seed 165: taken as
+      // an empty line run with nothing armed, the move that had run was typed again.)
+      if (opt_.trace) opt_.trace("the second look ran what was left: still gone");
+      continue;
+    }
+    if (foreign) {
+      // Not this byte's answer: late bytes of an earlier exchange (a call that gave up during a
+      // WHERE), no trace of anything. The line is unknown, the command perhaps run. (Bug fix,
+      // creeping-rest seed 100: a retry's first ^R read the report of the failed call's last
+      // WHERE as a damaged line run; the move, which had run, was typed again.)
+      if (opt_.trace) opt_.trace("an answer with output of no line run: late bytes");
+      if (ran) guesses_ = {*ran, ""};
+      known_ = false;
+      continue;
+    }
 
     // A line ran. Only the command itself (no part of it is a command; a damaged one is not a
     // command) or an empty line runs without a message: a success from a line that was not
@@ -697,6 +726,11 @@ Status Val2Arm::Dispose(const std::string& pending, CallClock* call, bool* execu
     std::optional<std::string> ran;
     const Status s = Step(send, expected, opt_.reply_timeout_s, call, &r, &ran);
     if (s != Status::kOk) return s;
+    if (armed && r.kind == Reaction::Kind::kExecuted && UnexplainedOutput(send, r)) {
+      if (ran) guesses_ = {*ran, ""};
+      known_ = false;  // late bytes of an earlier exchange, no trace of anything (as in Drive)
+      continue;
+    }
     if (armed) {
       cancel_trace |= saw_cancel_;
       execution_trace |= saw_execution_;
