@@ -602,6 +602,15 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
       known_ = false;
       continue;
     }
+    if (armed && check_motion && !ran && r.text.empty()) {
+      // A line ran silently while the driver did not know what the controller held (a ^R
+      // damaged into a CR, after a lost answer): the command, or an empty line left by its run
+      // or by a cancel. The line is gone now: for a move from rest WHERE tells (below). (Bug fix,
+      // creeping-rest seed 144 at 0.035 deg/s: taken as the command's run, a move cancelled by a
+      // CR damaged into ^U was lost.)
+      if (opt_.trace) opt_.trace("a line not known ran silently: gone, the arm tells");
+      continue;
+    }
 
     // A line ran. Only the command itself (no part of it is a command; a damaged one is not a
     // command) or an empty line runs without a message: a success from a line that was not

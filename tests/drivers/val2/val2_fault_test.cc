@@ -528,6 +528,30 @@ TEST(Val2Faults, TheSecondLookRunningTheEmptyLineIsNoNews) {
   EXPECT_EQ(rig.arm->counters().motion_checks, 1);
 }
 
+// Bug fix (LostAnswersOfMovesFromACreepingRest at 0.035 deg/s, seed 144): the CR of a move from
+// rest was damaged into a ^U and the cancel's echo lost; the driver's first look (^R) at the line
+// it no longer knew was damaged into a CR, which ran the empty line ("\r\n."). Taken as the
+// command's silent run, the move was lost. The line is gone: the arm tells, for a move that ran
+// (its answer lost) as for one cancelled.
+TEST(Val2Faults, AnUnknownLineRunSilentlyIsSettledByTheArm) {
+  for (const bool ran : {true, false}) {
+    LossRig rig;
+    Rest(rig);
+    if (ran) {
+      rig.loser->Arm(false, 0.12);
+    } else {
+      rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+    }
+    RetypeScript::Edit as_cr;
+    as_cr.send_as = std::uint8_t{'\r'};
+    rig.script->Arm({std::nullopt, as_cr});  // the check before the CR, the first look
+    EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk) << ran;
+    EXPECT_EQ(Executed(rig.line()), std::vector<std::string>{Line(kA)}) << ran;
+    EXPECT_EQ(rig.arm->counters().motion_checks, 1) << ran;
+    EXPECT_EQ(rig.arm->counters().unrun_found, ran ? 0 : 1) << ran;
+  }
+}
+
 // Bug fix (LostAnswersOfMovesFromACreepingRest at 0.025 deg/s, seed 100): a move's call gave up
 // (max_call_s) during a WHERE of its check, and the report came after the call. Its retry's first
 // ^R read that report ahead of its own answer, as a line that ran and printed something: taken
