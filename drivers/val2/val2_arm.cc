@@ -183,9 +183,11 @@ Status Val2Arm::Read(device::ArmState* state) {
   }
   state->t_s = t;
   state->qd.setZero();
+  rest_creep_deg_s_.fill(0.0);
   if (have_prev_ && t - prev_t_ > 1e-3) {
     for (int k = 0; k < 6; ++k) {
-      state->qd[k] = DegToRad(report.joints[k] - prev_deg_[k]) / (t - prev_t_);
+      rest_creep_deg_s_[k] = (report.joints[k] - prev_deg_[k]) / (t - prev_t_);
+      state->qd[k] = DegToRad(rest_creep_deg_s_[k]);
     }
   }
   state->moving = changed || motion_since_read_;
@@ -660,6 +662,9 @@ Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, Call
   int on_way = 0, short_of = 0, still = 0;           // reports in a row
   std::optional<std::array<double, 6>> last_joints;  // of the last report counted, and when
   double last_t = 0.0;
+  // The rest's creep (deg/s): first the rate between the two Reads that found the rest, then
+  // that between the check's last two still reports.
+  std::array<double, 6> creep = rest_creep_deg_s_;
   for (;;) {
     // The controller reads the joints when the WHERE runs, after it was asked.
     const Clock::TimePoint asked = clock_->Now();
@@ -677,17 +682,25 @@ Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, Call
     for (int k = 0; at_rest && k < 6; ++k) {
       at_rest = std::abs(report.joints[k] - (*last_joints)[k]) <= allowed_deg;
     }
-    if (at_rest && !motion.joints_deg && !located_) {
+    if (at_rest) {
+      for (int k = 0; k < 6; ++k) creep[k] = (report.joints[k] - (*last_joints)[k]) / (t - last_t);
+    }
+    if (!motion.joints_deg && !located_) {
       // The joints' travel in any direction (the tool's rest location not known) counts the
-      // creep since the rest too: taken away at the rate these two still reports show.
+      // creep since the rest too: taken away at the rest's rate (see `creep`). Taken away only
+      // at a still pair, a check begun late (the line retyped through corruption) whose reports
+      // were not still in pairs (a corrupted digit, or the creep's own rounding) counted the
+      // creep since the rest whole, and took a cancelled move for run (creeping-rest seeds
+      // at 0.035 deg/s).
       double travel = 0.0;
       for (int k = 0; k < 6; ++k) {
-        const double rate = (report.joints[k] - (*last_joints)[k]) / (t - last_t);
-        travel += std::pow(report.joints[k] - prev_deg_[k] - rate * (t - prev_t_), 2);
+        travel += std::pow(report.joints[k] - prev_deg_[k] - creep[k] * (t - prev_t_), 2);
       }
       progress = std::sqrt(travel) / opt_.moved_deg;
     }
-    if (opt_.trace) opt_.trace("motion check: progress " + std::to_string(progress));
+    if (opt_.trace) {
+      opt_.trace("motion check: progress " + std::to_string(progress) + (at_rest ? ", still" : ""));
+    }
     last_joints = report.joints;
     last_t = t;
     on_way = progress >= on_way_at ? on_way + 1 : 0;

@@ -295,6 +295,8 @@ class Val2Arm final : public device::Arm {
   // The last Read found the joints unchanged since the one before, with no motion commanded
   // in between: the arm rests at prev_deg_.
   bool at_rest_ = false;
+  // The joints' rate between the last two Reads (deg/s): at a rest, its creep.
+  std::array<double, 6> rest_creep_deg_s_{};
 
   std::string last_error_;
   Val2Counters counters_;

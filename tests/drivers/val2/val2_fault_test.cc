@@ -651,6 +651,28 @@ TEST(Val2Faults, AnArmCreepingAtRestIsNoMotion) {
   EXPECT_EQ(rig.arm->counters().unrun_found, 1);
 }
 
+// Bug fix (LostAnswersOfMovesFromACreepingRest at 0.035 deg/s, seeds 31, 93, 165 and 199): a tool
+// move whose rest location never came through is judged by the joints' travel from the rest, from
+// which the rest's creep was taken away only at a pair of still reports. A check begun long after
+// the rest, whose first report had a corrupted digit (no still pair with it), counted the creep
+// since the rest whole in the next report, past half the move: two reports on the way, a
+// cancelled move taken as run, and lost. The creep is taken away at the rest's own rate (the two
+// Reads that found it) until the check's still reports show theirs.
+TEST(Val2Faults, TheCreepSinceTheRestIsNoMotionInAnyReport) {
+  LossRig rig(Creeping(0.035));
+  rig.flip->SpoilLocations();
+  Rest(rig);
+  rig.clock.SleepFor(3.0);  // the arm creeps on (0.1 deg) before the move is sent
+  Pose3 step = Pose3::Identity();
+  step.translate(Eigen::Vector3d(0.002, 0.0, -0.002));
+  const std::string line = val2::Encode(val2::MoveRelativeCommand(val2::PoseToTrans(step)));
+  rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+  rig.flip->Arm(1);  // the check's first report: JT1 a degree off
+  EXPECT_EQ(rig.arm->MoveRelative(step), Status::kOk);
+  EXPECT_EQ(Executed(rig.line()), std::vector<std::string>{line});
+  EXPECT_EQ(rig.arm->counters().unrun_found, 1);
+}
+
 // A tool move (the servo's and the lift's) is judged along the tool's path: lost answer of a
 // move that ran, and of one cancelled.
 TEST(Val2Faults, LostAnswersOfToolMovesAreSettledAlongTheToolsPath) {
@@ -831,9 +853,18 @@ TEST(Val2Faults, LostAnswersOfMovesFromRestAreSettledUnderCorruption) {
 // corruption first) had carried past the threshold. Now decided at half the move's least joint
 // travel (reach_m), the creep the check's still reports show taken away. Seeds 100 and 165 of
 // 1-200 then ran a move twice (LateReportBeforeARetypeIsNoRun,
-// TheSecondLookRunningTheEmptyLineIsNoNews); now none of 200, and 6 of 200 differ at 0.035 deg/s.
+// TheSecondLookRunningTheEmptyLineIsNoNews), and 6 of 200 differed at 0.035 deg/s
+// (AnUnknownLineRunSilentlyIsSettledByTheArm, TheCreepSinceTheRestIsNoMotionInAnyReport); now
+// none of 200 at either rate.
 TEST(Val2Faults, LostAnswersOfMovesFromACreepingRestAreSettled) {
   SettlesLostAnswersOfMovesFromRest(0.025, 1);
+}
+
+// Faster, at 0.035 deg/s (0.0098 deg between two reads: still at rest for Read). Seed 165 lost a
+// cancelled tool move to the creep since its rest, counted whole in a report that was not still
+// with the one before.
+TEST(Val2Faults, LostAnswersOfMovesFromAFasterCreepingRestAreSettled) {
+  SettlesLostAnswersOfMovesFromRest(0.035, 165);
 }
 
 // A ByteLink that, once armed, sends the next character typed alone twice and loses the first
