@@ -528,6 +528,29 @@ TEST(Val2Faults, TheSecondLookRunningTheEmptyLineIsNoNews) {
   EXPECT_EQ(rig.arm->counters().motion_checks, 1);
 }
 
+std::string InputLine(LossRig& rig) {
+  return WithEmulator<Val2Emulator>(rig.line(), [](Val2Emulator& e) { return e.input_line(); });
+}
+
+// Bug fix (ThousandCommands, seeds 36, 58 and 94): the retype that checks the typed command came
+// back with its "^R" damaged ("<R") and a byte of the line damaged into a control character, and
+// the CR LF after the damaged "^R" counted as a trace of a line that ran. The next retype was cut
+// short by a dropout right after its prompt ("^R" CR LF "."), which reads as an empty line: with
+// that trace, the command was taken as run at once, reported done, and left in the controller
+// (the next call cancelled it). The line found empty is looked at again, and the command found.
+TEST(Val2Faults, ADamagedRetypeHeadIsNoTraceOfARun) {
+  LossRig rig;
+  device::ArmState state;
+  ASSERT_EQ(rig.arm->Read(&state), Status::kOk);  // one Read: the line known, no rest
+  RetypeScript::Edit damaged, cut;
+  damaged.damage = {{0, '<'}, {10, 0x99}};
+  cut.keep = 5;  // "^R" CR LF "."
+  rig.script->Arm({damaged, cut});
+  EXPECT_EQ(rig.arm->MoveJoints(kA), Status::kOk);
+  EXPECT_EQ(Executed(rig.line()), std::vector<std::string>{Line(kA)});
+  EXPECT_EQ(InputLine(rig), "");
+}
+
 // Bug fix (LostAnswersOfMovesFromACreepingRest at 0.035 deg/s, seed 144): the CR of a move from
 // rest was damaged into a ^U and the cancel's echo lost; the driver's first look (^R) at the line
 // it no longer knew was damaged into a CR, which ran the empty line ("\r\n."). Taken as the
