@@ -39,16 +39,20 @@ bool IsPrintable(char c) { return c >= 0x20 && c <= 0x7E; }
 
 // Whether the CR LF at `i` of an answer is the line break of a "^U" or "^R" echo rather than a
 // trace of a line that ran. In the answer to a ^R, the head ("^R" CR LF) with one of its two
-// characters damaged is the retype's too. (Bug fix, simulated line's seeds 36, 58 and 94: a
-// retype's "^R" damaged into "<R", or into "^" and a control character, left a trace of a run;
-// the line then found empty by a retype cut short after its prompt was taken as run at once,
-// without the second look, and the command, still in the controller, was cancelled by the next
-// call.)
+// characters damaged is the retype's too, and so is a CR LF followed by the prompt and a retyped
+// character (a byte inserted into the head, or the head lost): a line that ran ends its answer
+// with the prompt, and nothing follows before the host sends again. (Bug fix, simulated line's
+// seeds 36, 58 and 94: a retype's "^R" damaged into "<R", or into "^" and a control character, left
+// a trace of a run; the line then found empty by a retype cut short after its prompt was taken as
+// run at once, without the second look, and the command, still in the controller, was cancelled by
+// the next call.)
 bool RetypeOrCancelBreak(const std::string& answer, std::size_t i, bool retype_asked) {
   if (i >= 2 && answer[i - 2] == '^' && (answer[i - 1] == 'U' || answer[i - 1] == 'R')) {
     return true;
   }
-  return retype_asked && i == 2 && (answer[0] == '^' || answer[1] == 'R');
+  if (!retype_asked) return false;
+  if (i == 2 && (answer[0] == '^' || answer[1] == 'R')) return true;
+  return i + 3 < answer.size() && answer[i + 2] == val2::kPrompt && IsPrintable(answer[i + 3]);
 }
 
 // Bytes made readable for a trace.
@@ -668,6 +672,25 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
   }
 }
 
+bool Val2Arm::PastTheMove(const Motion& motion, double progress) const {
+  // Only where the whole is the move's own length (a tool move whose rest location is not known
+  // has a lower bound for its whole).
+  const bool past = !std::isnan(progress) && (motion.joints_deg || located_) &&
+                    std::abs(progress) > 2.0 * WholeProgress(motion) + 2.0;
+  if (past && opt_.trace)
+    opt_.trace("motion check: progress " + std::to_string(progress) + ", past");
+  return past;
+}
+
+bool Val2Arm::Reachable(const std::array<double, 6>& from, double from_t,
+                        const std::array<double, 6>& to, double to_t) const {
+  for (int k = 0; k < 6; ++k) {
+    const double allowed = opt_.max_joint_speed_deg_s[k] * (to_t - from_t) * 1.5 + 0.0015;
+    if (std::abs(to[k] - from[k]) > allowed) return false;
+  }
+  return true;
+}
+
 Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, CallClock* call,
                               bool* moved) {
   *moved = false;
@@ -679,6 +702,8 @@ Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, Call
   // The rest's creep (deg/s): first the rate between the two Reads that found the rest, then
   // that between the check's last two still reports.
   std::array<double, 6> creep = rest_creep_deg_s_;
+  std::array<double, 6> on_way_joints{};  // the last report counted, when on the way
+  double on_way_t = 0.0;
   for (;;) {
     // The controller reads the joints when the WHERE runs, after it was asked.
     const Clock::TimePoint asked = clock_->Now();
@@ -688,7 +713,8 @@ Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, Call
     const Status s = Where(call, &report, &t, &located);
     if (s != Status::kOk) return s;
     double progress = Progress(motion, report, located);
-    if (std::isnan(progress)) continue;  // a report that tells nothing: in a row, not counted
+    if (PastTheMove(motion, progress)) continue;  // a corrupted digit: in a row, not counted
+    if (std::isnan(progress)) continue;           // a report that tells nothing: likewise
     // Short of half the move with the joints where the last report had them: at rest, a move
     // that had run would be at its end (a corrupted digit moves a joint: never still).
     bool at_rest = last_joints.has_value();
@@ -717,7 +743,12 @@ Status Val2Arm::MovedFromRest(Clock::TimePoint since, const Motion& motion, Call
     }
     last_joints = report.joints;
     last_t = t;
-    on_way = progress >= on_way_at ? on_way + 1 : 0;
+    // On the way in two reports that the joints' speed limits allow one after the other (a digit
+    // corrupted in each, far apart, took a cancelled move for run: creeping-rest seed 76).
+    const bool along = on_way > 0 && Reachable(on_way_joints, on_way_t, report.joints, t);
+    on_way = progress >= on_way_at ? (along ? on_way + 1 : 1) : 0;
+    on_way_joints = report.joints;
+    on_way_t = t;
     short_of = progress < 1.0 ? short_of + 1 : 0;
     still = progress < on_way_at && at_rest ? still + 1 : 0;
     if (on_way >= 2) {

@@ -211,6 +211,14 @@ class Val2Arm final : public device::Arm {
   /// The whole of `motion` in Progress' units (the arm at the move's end: at least this; for a
   /// tool move whose rest location is not known, a lower bound through reach_m).
   double WholeProgress(const Motion& motion) const;
+  /// Whether a check's report shows the arm further from its rest along `motion` than twice the
+  /// move (plus two thresholds): a digit corrupted far off (a blank made a digit: tens of degrees,
+  /// or metres of the tool), which tells nothing. Judged only where the whole is the move's own.
+  bool PastTheMove(const Motion& motion, double progress) const;
+  /// Whether the joints could go from `from` to `to` in the time between within their speed
+  /// limits (max_joint_speed_deg_s, with confirm_reads' margin).
+  bool Reachable(const std::array<double, 6>& from, double from_t, const std::array<double, 6>& to,
+                 double to_t) const;
   /// Runs one state-changing command line (the common path of the commands). `motion`: a move
   /// that WHERE can see (it goes 2 thresholds: see moved_deg), so that a lost answer can be
   /// settled by the arm.

@@ -634,7 +634,10 @@ Reaction ClassifyReaction(std::string_view a) {
     }
     return r;
   }
-  if (Distance(a, kCancel) <= 1 && a.substr(0, 2) != "^R") {
+  // One byte off a cancel's echo, and not one byte off an empty retype: "^" and a damaged letter
+  // is either. (Taken for a cancel, an empty retype damaged in its letter made the driver take a
+  // command that had run, its answer damaged, for cancelled, and type it again: it ran twice.)
+  if (Distance(a, kCancel) <= 1 && Distance(a, kRetypeHead) > 1) {
     r.kind = Reaction::Kind::kCancel;
     return r;
   }
