@@ -426,6 +426,15 @@ struct LossRig : hgrasp::testing::LineRig<Val2Emulator> {
     }
     arm = std::make_unique<Val2Arm>(std::move(script_owned), options, clock);
   }
+  /// The next command's answer lost for 0.12 s from its CR: a move that ran (`ran`), or its CR
+  /// damaged into a cancel (^U) whose echo is lost too.
+  void LoseTheAnswer(bool ran) {
+    if (ran) {
+      loser->Arm(false, 0.12);
+    } else {
+      loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
+    }
+  }
   CrLoser* loser;
   JointDigitFlip* flip;
   RetypeScript* script;
@@ -600,11 +609,7 @@ TEST(Val2Faults, AnUnknownLineRunSilentlyIsSettledByTheArm) {
   for (const bool ran : {true, false}) {
     LossRig rig;
     Rest(rig);
-    if (ran) {
-      rig.loser->Arm(false, 0.12);
-    } else {
-      rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
-    }
+    rig.LoseTheAnswer(ran);
     RetypeScript::Edit as_cr;
     as_cr.send_as = std::uint8_t{'\r'};
     rig.script->Arm({std::nullopt, as_cr});  // the check before the CR, the first look
@@ -781,11 +786,7 @@ TEST(Val2Faults, LostAnswersOfToolMovesAreSettledAlongTheToolsPath) {
   for (const bool ran : {true, false}) {
     LossRig rig;
     Rest(rig);
-    if (ran) {
-      rig.loser->Arm(false, 0.12);
-    } else {
-      rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
-    }
+    rig.LoseTheAnswer(ran);
     EXPECT_EQ(rig.arm->MoveRelative(turn), Status::kOk) << ran;
     EXPECT_EQ(Executed(rig.line()), std::vector<std::string>{turn_line}) << ran;
     EXPECT_EQ(rig.arm->counters().unrun_found, ran ? 0 : 1) << ran;
@@ -795,11 +796,7 @@ TEST(Val2Faults, LostAnswersOfToolMovesAreSettledAlongTheToolsPath) {
     LossRig rig;
     rig.flip->SpoilLocations();
     Rest(rig);
-    if (ran) {
-      rig.loser->Arm(false, 0.12);
-    } else {
-      rig.loser->Arm(false, 0.12, std::uint8_t{val2::kCtrlU});
-    }
+    rig.LoseTheAnswer(ran);
     EXPECT_EQ(rig.arm->MoveRelative(up), Status::kOk) << ran;
     EXPECT_EQ(Executed(rig.line()), std::vector<std::string>{line}) << ran;
     EXPECT_EQ(rig.arm->counters().motion_checks, 1) << ran;
