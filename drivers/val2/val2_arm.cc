@@ -180,11 +180,7 @@ Status Val2Arm::Read(device::ArmState* state) {
       bool located2 = false;
       s = Where(&call, &second, &t2, &located2);
       if (s != Status::kOk) break;
-      bool agree = true;
-      for (int k = 0; k < 6; ++k) {
-        const double allowed = opt_.max_joint_speed_deg_s[k] * (t2 - t) * 1.5 + 0.0015;
-        if (std::abs(second.joints[k] - report.joints[k]) > allowed) agree = false;
-      }
+      const bool agree = Reachable(report.joints, t, second.joints, t2);
       report = second;
       t = t2;
       located = located2;
