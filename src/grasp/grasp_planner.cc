@@ -29,7 +29,63 @@ bool HandClear(const Pose3& X_WE, double opening, const std::vector<model::BoxMo
   return true;
 }
 
+/// Whether the arm's links clear the boxes and the table at arm_path_steps steps of the
+/// joint-space move from q0 to q1, both ends included.
+bool PathClear(const robot::ArmKinematics& arm, const device::Joint6& q0, const device::Joint6& q1,
+               const std::vector<model::BoxModel>& boxes, const GraspConfig& config) {
+  const int steps = std::max(1, config.arm_path_steps);
+  for (int k = 0; k <= steps; ++k) {
+    const device::Joint6 q = q0 + (q1 - q0) * (static_cast<double>(k) / steps);
+    if (!ArmClear(arm, q, boxes, config)) return false;
+  }
+  return true;
+}
+
+double PointBoxDistance(const Vector3d& p, const OrientedBox& box) {
+  const Vector3d local = box.R.transpose() * (p - box.centre);
+  return (local.cwiseAbs() - 0.5 * box.size).cwiseMax(0.0).norm();
+}
+
 }  // namespace
+
+double SegmentBoxDistance(const Vector3d& a, const Vector3d& b, const OrientedBox& box) {
+  const Vector3d ab = b - a;
+  // The distance to a convex set is convex along the segment: a golden-section search finds its
+  // minimum (to 1e-8 of the segment's length in 40 steps).
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double lo = 0.0, hi = 1.0;
+  double t1 = hi - g * (hi - lo), t2 = lo + g * (hi - lo);
+  double f1 = PointBoxDistance(a + t1 * ab, box), f2 = PointBoxDistance(a + t2 * ab, box);
+  for (int i = 0; i < 40; ++i) {
+    if (f1 <= f2) {
+      hi = t2, t2 = t1, f2 = f1;
+      t1 = hi - g * (hi - lo);
+      f1 = PointBoxDistance(a + t1 * ab, box);
+    } else {
+      lo = t1, t1 = t2, f1 = f2;
+      t2 = lo + g * (hi - lo);
+      f2 = PointBoxDistance(a + t2 * ab, box);
+    }
+  }
+  return std::min({f1, f2, PointBoxDistance(a, box), PointBoxDistance(b, box)});
+}
+
+bool ArmClear(const robot::ArmKinematics& arm, const device::Joint6& q,
+              const std::vector<model::BoxModel>& boxes, const GraspConfig& config) {
+  for (const robot::Capsule& c : arm.LinkCapsules(q)) {
+    if (std::min(c.a.z(), c.b.z()) - c.radius < config.table_clearance_m) return false;
+    const double reach = c.radius + config.arm_clearance_m;
+    const Vector3d mid = 0.5 * (c.a + c.b);
+    const double half_length = 0.5 * (c.b - c.a).norm();
+    for (const model::BoxModel& model : boxes) {
+      const OrientedBox box = BoxOf(model);
+      // Far apart (the spheres around both further than reach): no search.
+      if ((mid - box.centre).norm() - half_length - 0.5 * box.size.norm() >= reach) continue;
+      if (SegmentBoxDistance(c.a, c.b, box) < reach) return false;
+    }
+  }
+  return true;
+}
 
 std::array<OrientedBox, 3> HandBoxes(const Pose3& X_WE, double opening_m,
                                      const HandGeometry& hand) {
@@ -127,6 +183,10 @@ std::optional<GraspPlan> PlanGrasp(const std::vector<model::BoxModel>& boxes, in
           const robot::ArmIkSolution* p = same_configuration(pre, s);
           const robot::ArmIkSolution* v = same_configuration(via, s);
           if (p == nullptr || v == nullptr) continue;
+          if (!PathClear(arm, v->q, p->q, boxes, config) ||
+              !PathClear(arm, p->q, s.q, boxes, config)) {
+            continue;
+          }
           GraspPlan plan;
           plan.box = target;
           plan.side = side == 0 ? device::Side::kLeft : device::Side::kRight;

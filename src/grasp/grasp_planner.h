@@ -3,8 +3,9 @@
 /// the middles of two opposite faces just below the top, the hand aligned with the contacts and
 /// the palm above the box, reachable by the Puma's inverse kinematics within its joint limits,
 /// the most comfortable of the feasible grasps chosen. Beyond the paper: both arms are tried, a
-/// hand that would hit the table or another box is refused, and a pre-grasp pose above the box
-/// is planned for the approach.
+/// hand that would hit the table or another box is refused, an arm whose links would touch a box
+/// or the table on its way down to the grasp is refused, and a pre-grasp pose above the box is
+/// planned for the approach.
 
 #include <Eigen/Core>
 #include <array>
@@ -39,6 +40,13 @@ struct GraspConfig {
   double via_height_m = 0.10;  ///< via pose: this far above the pre-grasp
   std::vector<double> tilts_deg = {0, 15, 30, 45, 60, -15, -30};  ///< approach tilts about x_E
   double table_clearance_m = 0.003;  ///< the hand stays this far above the table (z = 0)
+  /// The arm's links (ArmKinematics::LinkCapsules) stay this far from every box, the target
+  /// included: the boxes are models (a few mm off) and the arm is not its model either (its
+  /// joint zeros and links are a few mm off, which the servo corrects at the hand only).
+  double arm_clearance_m = 0.01;
+  /// The links are checked at this many steps of each joint-space move, via to pre-grasp and
+  /// pre-grasp to grasp (the approach moves in joint space, the servo close to it).
+  int arm_path_steps = 5;
   HandGeometry hand;
 };
 
@@ -64,7 +72,8 @@ struct GraspPlan {
 /// opposite side faces narrow enough for the open hand, each arm, each approach tilt and each
 /// inverse-kinematics solution within the joint limits (with the pre-grasp and the via pose
 /// above it reachable in the same configuration) whose hand clears the table and the other
-/// boxes at the grasp, the pre-grasp and the via pose, the one with the smallest comfort angle;
+/// boxes at the grasp, the pre-grasp and the via pose, and whose links clear the table and every
+/// box from the via pose down to the grasp, the one with the smallest comfort angle;
 /// nullopt when none is feasible. `arms` holds the left arm then the right one. If `feasible` is
 /// not null it receives every feasible candidate (for tests and pictures).
 std::optional<GraspPlan> PlanGrasp(const std::vector<model::BoxModel>& boxes, int target,
@@ -83,5 +92,14 @@ std::array<OrientedBox, 3> HandBoxes(const Pose3& X_WE, double opening_m, const 
 
 /// Whether two oriented boxes overlap (separating axis test, 15 axes).
 bool Overlap(const OrientedBox& a, const OrientedBox& b);
+
+/// The distance from the segment a-b to a solid oriented box; 0 where they meet.
+double SegmentBoxDistance(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                          const OrientedBox& box);
+
+/// Whether the arm's links at q keep arm_clearance_m from every box and table_clearance_m above
+/// the table (z = 0).
+bool ArmClear(const robot::ArmKinematics& arm, const device::Joint6& q,
+              const std::vector<model::BoxModel>& boxes, const GraspConfig& config);
 
 }  // namespace hgrasp::grasp

@@ -105,6 +105,19 @@ ArmKinematics ArmKinematics::FromTree(const KinematicTree& tree, const std::stri
     arm.upper_[i] = limits.upper;
   }
   arm.M_ = tree.LinkPose(side + "_gripper", {});
+  for (int k = 1; k <= 6; ++k) {
+    const std::string link = side + "_link" + std::to_string(k);
+    const Pose3 X_WL = tree.LinkPose(link, {});
+    for (const KinematicTree::Cylinder& c : tree.Cylinders(link)) {
+      const Pose3 X_WG = X_WL * c.X_LG;
+      // An arm's tube (long: the MJCF collides it as a capsule of the same extent) is the
+      // capsule inside it; a joint's drum (short) the capsule around it.
+      const double inset = c.length >= 4.0 * c.radius ? c.radius : 0.0;
+      const Vector3d half = (0.5 * c.length - inset) * X_WG.linear().col(2);
+      arm.capsules_.push_back(
+          {k, {X_WG.translation() - half, X_WG.translation() + half, c.radius}});
+    }
+  }
   arm.shoulder_ = Meet(arm.w_[0], arm.r_[0], arm.w_[1], arm.r_[1], side + " joints 1 and 2");
   arm.wrist_ = Meet(arm.w_[3], arm.r_[3], arm.w_[4], arm.r_[4], side + " joints 4 and 5");
   const Vector3d to_axis6 = arm.wrist_ - arm.r_[5];
@@ -113,6 +126,18 @@ ArmKinematics ArmKinematics::FromTree(const KinematicTree& tree, const std::stri
                      "an axis through the wrist centre of joints 4 and 5");
   }
   return arm;
+}
+
+std::vector<Capsule> ArmKinematics::LinkCapsules(const device::Joint6& q) const {
+  std::array<Pose3, 7> X;  // X[k]: the product of the first k exponentials
+  X[0] = Pose3::Identity();
+  for (int i = 0; i < 6; ++i) X[i + 1] = X[i] * Exp(w_[i], r_[i], q[i]);
+  std::vector<Capsule> out;
+  out.reserve(capsules_.size());
+  for (const LinkCapsule& c : capsules_) {
+    out.push_back({X[c.joints] * c.at_zero.a, X[c.joints] * c.at_zero.b, c.at_zero.radius});
+  }
+  return out;
 }
 
 Pose3 ArmKinematics::Forward(const device::Joint6& q) const {

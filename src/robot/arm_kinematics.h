@@ -36,6 +36,12 @@ struct ArmIkSolution {
   bool wrist = false;     ///< the second q4/q5 branch (wrist flipped)
 };
 
+/// The points within `radius` of the segment from a to b.
+struct Capsule {
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  double radius = 0;
+};
+
 class ArmKinematics {
  public:
   /// The arm `side` ("left" or "right") of `tree`: joints <side>_j1..<side>_j6, gripper frame
@@ -60,6 +66,10 @@ class ArmKinematics {
   /// straight, q5 = 0) one representative of the family is returned.
   std::vector<ArmIkSolution> Inverse(const Pose3& X_WE) const;
 
+  /// The arm's body at q in W: each cylinder of links 1-6 in the URDF as a capsule of its axis
+  /// and radius: inside a tube (length at least 4 radii; the MJCF's capsule), around a joint's
+  /// drum (shorter). The hand is not in it.
+  std::vector<Capsule> LinkCapsules(const device::Joint6& q) const;
   /// Whether every joint lies within the URDF's limits.
   bool WithinLimits(const device::Joint6& q) const;
   const std::array<double, 6>& lower() const { return lower_; }
@@ -75,6 +85,11 @@ class ArmKinematics {
   Pose3 M_ = Pose3::Identity();       // X_WE at q = 0
   Eigen::Vector3d shoulder_ = Eigen::Vector3d::Zero(), wrist_ = Eigen::Vector3d::Zero();
   std::array<double, 6> lower_{}, upper_{};
+  struct LinkCapsule {
+    int joints = 0;   // how many joints move it (link k: joints 1..k)
+    Capsule at_zero;  // in W at q = 0
+  };
+  std::vector<LinkCapsule> capsules_;
 };
 
 }  // namespace hgrasp::robot

@@ -84,7 +84,7 @@ KinematicTree KinematicTree::FromUrdfString(const std::string& xml,
 
   // Breadth-first from the root, so parents always come before their children.
   std::vector<urdf::LinkConstSharedPtr> queue = {model->getRoot()};
-  tree.links_.push_back({model->getRoot()->name, -1, -1});
+  tree.links_.push_back({model->getRoot()->name, -1, -1, {}});
   tree.link_index_[model->getRoot()->name] = 0;
   for (size_t next = 0; next < queue.size(); ++next) {
     const urdf::LinkConstSharedPtr link = queue[next];  // a copy: queue grows below
@@ -130,10 +130,22 @@ KinematicTree KinematicTree::FromUrdfString(const std::string& xml,
       tree.joints_.push_back(j);
       const urdf::LinkConstSharedPtr child = model->getLink(uj->child_link_name);
       HGRASP_DEMAND_MSG(child != nullptr, uj->child_link_name);  // urdfdom checks this
-      tree.links_.push_back({child->name, tree.link_index_.at(link->name),
-                             static_cast<int>(tree.joints_.size()) - 1});
+      tree.links_.push_back({child->name,
+                             tree.link_index_.at(link->name),
+                             static_cast<int>(tree.joints_.size()) - 1,
+                             {}});
       tree.link_index_[child->name] = child_index;
       queue.push_back(child);
+    }
+  }
+
+  for (Link& link : tree.links_) {
+    for (const urdf::VisualSharedPtr& visual : model->getLink(link.name)->visual_array) {
+      if (!visual || !visual->geometry || visual->geometry->type != urdf::Geometry::CYLINDER) {
+        continue;
+      }
+      const auto& c = static_cast<const urdf::Cylinder&>(*visual->geometry);
+      link.cylinders.push_back({ToPose3(visual->origin), c.radius, c.length});
     }
   }
 
@@ -174,6 +186,15 @@ std::vector<std::string> KinematicTree::LinkNames() const {
   names.reserve(links_.size());
   for (const Link& l : links_) names.push_back(l.name);
   return names;
+}
+
+const std::vector<KinematicTree::Cylinder>& KinematicTree::Cylinders(
+    const std::string& link) const {
+  const auto it = link_index_.find(link);
+  if (it == link_index_.end()) {
+    throw InputError(source_, "link", link, "a link of robot '" + name_ + "'");
+  }
+  return links_[it->second].cylinders;
 }
 
 std::vector<std::string> KinematicTree::JointNames() const {

@@ -67,6 +67,17 @@ class KinematicTree {
   /// @throws hgrasp::InputError when `joint` is not a movable joint of this tree.
   JointLimits Limits(const std::string& joint) const;
 
+  /// A cylinder of a link's <visual> geometry (models/humanoid.xml collides the same shapes):
+  /// its axis is z of X_LG, its centre X_LG's origin.
+  struct Cylinder {
+    Pose3 X_LG = Pose3::Identity();  ///< in the link's frame
+    double radius = 0;               ///< m
+    double length = 0;               ///< m, along z of X_LG
+  };
+  /// The cylinders among `link`'s <visual> elements, in the file's order (boxes, spheres and
+  /// meshes are not listed).
+  /// @throws hgrasp::InputError for an unknown link.
+  const std::vector<Cylinder>& Cylinders(const std::string& link) const;
   /// Pose X_RL of every link L in the root frame R.
   /// @param q joint values; missing joints are 0, the value given for a mimic joint is ignored
   ///          (it follows its master).
@@ -95,6 +106,7 @@ class KinematicTree {
     std::string name;
     int parent = -1;        ///< index into links_; -1 for the root
     int parent_joint = -1;  ///< index into joints_; -1 for the root
+    std::vector<Cylinder> cylinders;
   };
 
   KinematicTree() = default;

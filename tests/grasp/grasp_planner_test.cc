@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
+#include <random>
 
 #include "common/paths.h"
 
@@ -111,6 +113,46 @@ TEST(PlanGrasp, NeighbourInTheWayForcesTheOtherPair) {
   }
 }
 
+// random_3002, reduced: the plan's forearm rested on a tall neighbour that the hand cleared (the
+// planner checked the hand only), so the arm stopped 1.2 deg short at joint 2 and the servo
+// could not converge. A tall box put under the forearm of the free plan must move the plan off it.
+TEST(PlanGrasp, ArmLinksClearTheOtherBoxes) {
+  const Arms arms;
+  std::vector<model::BoxModel> boxes = {Box(0.30, 0.10, 20, {0.05, 0.04, 0.08})};
+  const std::optional<GraspPlan> free = PlanGrasp(boxes, 0, arms.both());
+  ASSERT_TRUE(free.has_value());
+  const robot::ArmKinematics& arm = free->side == device::Side::kLeft ? arms.left : arms.right;
+  const GraspConfig config;
+  ASSERT_TRUE(ArmClear(arm, free->q_pre, boxes, config));
+  // The forearm tube at the pre-grasp (the longest capsule beyond the elbow): a box standing under
+  // its middle, its top 1 cm below the tube, clear of the hand at every pose of the plan.
+  const std::vector<robot::Capsule> links = arm.LinkCapsules(free->q_pre);
+  const robot::Capsule* forearm = nullptr;
+  for (const robot::Capsule& c : links) {
+    if (forearm == nullptr || (c.b - c.a).norm() > (forearm->b - forearm->a).norm()) forearm = &c;
+  }
+  ASSERT_NE(forearm, nullptr);
+  const Vector3d under = 0.5 * (forearm->a + forearm->b);
+  const double top = under.z() - forearm->radius - 0.005;
+  ASSERT_GT(top, 0.05);
+  boxes.push_back(Box(under.x(), under.y(), 0, {0.04, 0.04, top}));
+  for (const Pose3* X : {&free->X_WE, &free->X_WE_pre, &free->X_WE_via}) {
+    for (const OrientedBox& part : HandBoxes(*X, free->opening_m, {})) {
+      ASSERT_FALSE(
+          Overlap(part, {boxes[1].X_WO.translation(), boxes[1].X_WO.linear(), boxes[1].size_O}));
+    }
+  }
+  EXPECT_FALSE(ArmClear(arm, free->q_pre, boxes, config));
+  const std::optional<GraspPlan> plan = PlanGrasp(boxes, 0, arms.both());
+  ASSERT_TRUE(plan.has_value());
+  EXPECT_GT((plan->q_pre - free->q_pre).norm(), 1e-3);
+  const robot::ArmKinematics& used = plan->side == device::Side::kLeft ? arms.left : arms.right;
+  for (double s = 0; s <= 1.0; s += 0.1) {
+    EXPECT_TRUE(ArmClear(used, plan->q_via + s * (plan->q_pre - plan->q_via), boxes, config));
+    EXPECT_TRUE(ArmClear(used, plan->q_pre + s * (plan->q - plan->q_pre), boxes, config));
+  }
+}
+
 TEST(PlanGrasp, OutOfReachIsNoPlan) {
   const Arms arms;
   const std::vector<model::BoxModel> boxes = {Box(0.95, 0.0, 0, {0.06, 0.06, 0.08})};
@@ -130,6 +172,42 @@ TEST(Overlap, SeparatingAxes) {
   EXPECT_TRUE(Overlap(a, b));
   b.centre = Vector3d(1.22, 0, 0);
   EXPECT_FALSE(Overlap(a, b));
+}
+
+TEST(SegmentBoxDistance, HandWorkedCases) {
+  const OrientedBox unit{Vector3d::Zero(), Eigen::Matrix3d::Identity(), Vector3d(1, 1, 1)};
+  // Beside a face, parallel to it: 2 - 0.5.
+  EXPECT_NEAR(SegmentBoxDistance({2, -1, 0}, {2, 1, 0}, unit), 1.5, 1e-9);
+  // Through the box: 0.
+  EXPECT_EQ(SegmentBoxDistance({-2, 0.1, 0.2}, {2, 0.1, 0.2}, unit), 0.0);
+  // Parallel to an edge at (1.5, 1.5): sqrt(2) from the edge (0.5, 0.5).
+  EXPECT_NEAR(SegmentBoxDistance({1.5, 1.5, -1}, {1.5, 1.5, 1}, unit), std::sqrt(2.0), 1e-9);
+  // Ending short of the box, pointing at it: from its end.
+  EXPECT_NEAR(SegmentBoxDistance({3, 0, 0}, {0.8, 0, 0}, unit), 0.3, 1e-9);
+  // Crossing past a corner: the segment x = y = t, z = 1 passes the corner (.5,.5,.5) at 0.5.
+  EXPECT_NEAR(SegmentBoxDistance({-1, -1, 1}, {2, 2, 1}, unit), 0.5, 1e-9);
+}
+
+TEST(SegmentBoxDistance, AgreesWithDenseSampling) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    OrientedBox box{Vector3d(u(rng), u(rng), u(rng)) * 0.2,
+                    Eigen::AngleAxisd(3.0 * u(rng), Vector3d(u(rng), u(rng), u(rng)).normalized())
+                        .toRotationMatrix(),
+                    Vector3d(0.3 + 0.2 * u(rng), 0.3 + 0.2 * u(rng), 0.3 + 0.2 * u(rng))};
+    const Vector3d a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng));
+    double brute = 1e9;
+    for (int k = 0; k <= 20000; ++k) {
+      const Vector3d p = a + (b - a) * (k / 20000.0);
+      const Vector3d l = box.R.transpose() * (p - box.centre);
+      brute = std::min(brute, (l.cwiseAbs() - 0.5 * box.size).cwiseMax(0.0).norm());
+    }
+    // Sampled every 1/20000 of at most 3.5: the brute force is high by at most 1e-4.
+    const double d = SegmentBoxDistance(a, b, box);
+    EXPECT_LE(d, brute + 1e-12) << trial;
+    EXPECT_GE(d, brute - 1.0e-4) << trial;
+  }
 }
 
 }  // namespace

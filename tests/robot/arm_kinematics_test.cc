@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <cstdio>
 #include <random>
+#include <string>
 
 #include "common/error.h"
 #include "common/paths.h"
@@ -113,6 +114,46 @@ TEST_P(ArmKinematicsTest, LimitsFromTheUrdf) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Arms, ArmKinematicsTest, ::testing::Values("left", "right"));
+
+// The capsules move with their links: each end, taken into its link's frame at q = 0, is where
+// the tree's own forward kinematics puts it at any q. The forearm tube is the MJCF's capsule
+// (models/humanoid.xml: fromto 0 0 -0.0635 0 0.17 -0.0635 in link 3, radius 0.028).
+TEST_P(ArmKinematicsTest, LinkCapsulesMoveWithTheirLinks) {
+  const std::string side = GetParam();
+  const ArmKinematics arm = ArmKinematics::FromTree(Tree(), side);
+  const device::Joint6 zero = device::Joint6::Zero();
+  const std::vector<Capsule> at_zero = arm.LinkCapsules(zero);
+  ASSERT_GE(at_zero.size(), 6u);
+  const Pose3 X_WL3 = Tree().LinkPose(side + "_link3", {});
+  int forearms = 0;
+  const Eigen::Vector3d elbow(0, 0, -0.0635), wrist(0, 0.17, -0.0635);
+  for (const Capsule& c : at_zero) {
+    const Eigen::Vector3d a = X_WL3.inverse() * c.a, b = X_WL3.inverse() * c.b;
+    const bool ends = ((a - elbow).norm() < 1e-9 && (b - wrist).norm() < 1e-9) ||
+                      ((b - elbow).norm() < 1e-9 && (a - wrist).norm() < 1e-9);
+    if (ends && std::abs(c.radius - 0.028) < 1e-12) ++forearms;
+  }
+  EXPECT_EQ(forearms, 1);
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 50; ++trial) {
+    const device::Joint6 q = RandomWithinLimits(arm, &rng);
+    KinematicTree::JointValues values;
+    for (int i = 0; i < 6; ++i) values[side + "_j" + std::to_string(i + 1)] = q[i];
+    const std::vector<Capsule> moved = arm.LinkCapsules(q);
+    ASSERT_EQ(moved.size(), at_zero.size());
+    // Each capsule belongs to one link: the one whose frame carries both its ends.
+    for (size_t k = 0; k < moved.size(); ++k) {
+      bool carried = false;
+      for (int link = 1; link <= 6 && !carried; ++link) {
+        const std::string name = side + "_link" + std::to_string(link);
+        const Pose3 X = Tree().LinkPose(name, values) * Tree().LinkPose(name, {}).inverse();
+        carried = (X * at_zero[k].a - moved[k].a).norm() < 1e-9 &&
+                  (X * at_zero[k].b - moved[k].b).norm() < 1e-9;
+      }
+      EXPECT_TRUE(carried) << "capsule " << k << " trial " << trial;
+    }
+  }
+}
 
 TEST(ArmKinematics, UnknownSideThrows) {
   EXPECT_THROW(ArmKinematics::FromTree(Tree(), "middle"), hgrasp::InputError);

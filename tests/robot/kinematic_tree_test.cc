@@ -289,6 +289,31 @@ double RotationAngle(const Eigen::Matrix3d& R_a, const Eigen::Matrix3d& R_b) {
   return Eigen::AngleAxisd(R_a.transpose() * R_b).angle();
 }
 
+TEST(KinematicTreeTest, ReadsTheVisualCylinders) {
+  const KinematicTree tree = KinematicTree::FromUrdfString(R"(<?xml version="1.0"?>
+<robot name="shapes">
+  <link name="base">
+    <visual><origin xyz="0 0 0.5" rpy="1.5707963267948966 0 0"/>
+      <geometry><cylinder radius="0.1" length="0.4"/></geometry></visual>
+    <visual><geometry><box size="1 1 1"/></geometry></visual>
+    <visual><origin xyz="1 2 3"/><geometry><cylinder radius="0.2" length="0.6"/></geometry></visual>
+  </link>
+  <link name="bare"/>
+  <joint name="j" type="fixed"><parent link="base"/><child link="bare"/></joint>
+</robot>)",
+                                                           "shapes");
+  const std::vector<KinematicTree::Cylinder>& c = tree.Cylinders("base");
+  ASSERT_EQ(c.size(), 2u);  // the box is not a cylinder
+  EXPECT_NEAR(c[0].radius, 0.1, 1e-12);
+  EXPECT_NEAR(c[0].length, 0.4, 1e-12);
+  EXPECT_LT((c[0].X_LG.translation() - Vector3d(0, 0, 0.5)).norm(), 1e-12);
+  // Rolled 90 deg about x: the cylinder's axis (z) lies along -y.
+  EXPECT_LT((c[0].X_LG.linear().col(2) - Vector3d(0, -1, 0)).norm(), 1e-12);
+  EXPECT_LT((c[1].X_LG.translation() - Vector3d(1, 2, 3)).norm(), 1e-12);
+  EXPECT_TRUE(tree.Cylinders("bare").empty());
+  EXPECT_THROW(tree.Cylinders("nowhere"), InputError);
+}
+
 TEST_F(HumanoidTest, Structure) {
   EXPECT_EQ(tree_->root(), "world");
   EXPECT_EQ(tree_->JointNames().size(), 21u);  // 5 head + 2 x (6 arm + 2 fingers)
