@@ -462,9 +462,13 @@ Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume,
     // The line has left the controller's input. Not when a retype shows the start of the line:
     // a line that ran leaves the input empty, so that is a retype cut short by a dropout (bug
     // fix, found by a simulated line's seed: "^R" damaged on its way back and cut short read as
-    // a run, and the command was reported done and lost).
+    // a run, and the command was reported done and lost). Unless two more looks show the same
+    // start after a trace of a run: no dropout cuts three retypes alike, so stray characters
+    // came after the run. (Bug fix, soak seed 12 with inserted bytes: a 'D' put into the empty
+    // line after the run, taken as the command's start, was typed on and ran the command twice.)
+    const bool start_shown = !RTrim(buf_).empty() && StartsWith(line, buf_);
     const bool gone =
-        known_ && Gone(buf_, line) && !(!RTrim(buf_).empty() && StartsWith(line, buf_));
+        known_ && Gone(buf_, line) && (!start_shown || (armed && execution_trace && suspect >= 2));
     if (!known_) {
       send = val2::kCtrlR;  // what does the controller hold?
       ++counters_.probes;
