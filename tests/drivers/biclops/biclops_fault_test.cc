@@ -16,7 +16,7 @@
 #include "biclops/biclops_head.h"
 #include "emulators/biclops_emulator.h"
 #include "serial/faulty_link.h"
-#include "emulators/sim_line.h"
+#include "tests/drivers/biclops/biclops_rig.h"
 
 namespace hgrasp::drivers {
 namespace {
@@ -31,8 +31,7 @@ std::array<std::int32_t, 3> TargetCounts(int k) {
 }
 
 TEST(BiclopsFaults, ThousandCommandsNoneLostRepeatedOrAltered) {
-  SimClock clock;
-  SimLine host(clock, std::make_unique<BiclopsEmulator>(), 9600);
+  testing::BiclopsLineRig rig;
   FaultPlan plan;
   plan.corrupt_probability = 0.01;
   plan.dropouts_per_s = 0.5;
@@ -40,12 +39,12 @@ TEST(BiclopsFaults, ThousandCommandsNoneLostRepeatedOrAltered) {
   plan.seed = 20260101;
   // Other seeds for soak runs: HGRASP_BICLOPS_FAULT_SEED=n.
   if (const char* seed = std::getenv("HGRASP_BICLOPS_FAULT_SEED")) plan.seed = std::stoull(seed);
-  auto faulty = std::make_unique<FaultyLink>(host.Open(), plan, clock);
+  auto faulty = std::make_unique<FaultyLink>(rig.Open(), plan, rig.clock);
   FaultyLink* line = faulty.get();
   const BiclopsOptions options = DefaultBiclopsOptions();
-  BiclopsHead head(std::move(faulty), options, clock);
+  BiclopsHead head(std::move(faulty), options, rig.clock);
 
-  const Clock::TimePoint t0 = clock.Now();
+  const Clock::TimePoint t0 = rig.clock.Now();
   std::vector<PmdExecuted> expect;
   std::array<std::int64_t, 3> active{0, 0, 0};  // the emulated head starts at 0
   bool initialized = false;
@@ -93,12 +92,11 @@ TEST(BiclopsFaults, ThousandCommandsNoneLostRepeatedOrAltered) {
     failures += tries - 1;
     worst_tries = std::max(worst_tries, tries);
   }
-  const double elapsed = Clock::ToSeconds(clock.Now() - t0);
+  const double elapsed = rig.Since(t0);
 
   const FaultCounts f = line->counts();
   const BiclopsCounters d = head.counters();
-  const BiclopsEmulator::Counts e =
-      host.With([](DeviceEmulator& dev) { return dynamic_cast<BiclopsEmulator&>(dev).counts(); });
+  const BiclopsEmulator::Counts e = rig.With([](BiclopsEmulator& dev) { return dev.counts(); });
   std::printf(
       "seed %llu: 1000 commands (%d MoveTo, %d Read) in %.1f s; %d failed calls retried (at most "
       "%d tries)\n"
@@ -118,14 +116,13 @@ TEST(BiclopsFaults, ThousandCommandsNoneLostRepeatedOrAltered) {
   EXPECT_GT(f.corrupted, 100u);
   EXPECT_GT(f.dropouts, 0u);
 
-  const std::vector<PmdExecuted> log =
-      host.With([](DeviceEmulator& dev) { return dynamic_cast<BiclopsEmulator&>(dev).executed(); });
+  const std::vector<PmdExecuted> log = rig.Log();
   EXPECT_EQ(log.size(), expect.size());
   for (std::size_t i = 0; i < std::min(log.size(), expect.size()); ++i) {
     ASSERT_EQ(log[i], expect[i]) << "entry " << i << ": opcode " << int(log[i].opcode) << " axis "
                                  << log[i].axis << " value " << log[i].value << "; expected opcode "
-                                 << int(expect[i].opcode) << " axis " << expect[i].axis
-                                 << " value " << expect[i].value;
+                                 << int(expect[i].opcode) << " axis " << expect[i].axis << " value "
+                                 << expect[i].value;
   }
   // The driver's own log explains the chip's (an entry is unconfirmed only where a failed call
   // left its outcome unknown).
@@ -140,10 +137,10 @@ TEST(BiclopsFaults, ThousandCommandsNoneLostRepeatedOrAltered) {
 
   // And the head ends where it was last sent.
   device::HeadState state;
-  const Clock::TimePoint t1 = clock.Now();
+  const Clock::TimePoint t1 = rig.clock.Now();
   do {
     if (head.Read(&state) != Status::kOk) state.moving = true;
-  } while (state.moving && Clock::ToSeconds(clock.Now() - t1) < 10.0);
+  } while (state.moving && rig.Since(t1) < 10.0);
   EXPECT_NEAR(state.q.pan, last.pan, 1e-9);
   EXPECT_NEAR(state.q.tilt, last.tilt, 1e-9);
   EXPECT_NEAR(state.q.verge, last.verge, 1e-9);

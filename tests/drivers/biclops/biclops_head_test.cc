@@ -17,35 +17,21 @@
 #include "common/clock.h"
 #include "common/error.h"
 #include "emulators/biclops_emulator.h"
-#include "emulators/sim_line.h"
 #include "serial/faulty_link.h"
+#include "tests/drivers/biclops/biclops_rig.h"
 
 namespace hgrasp::drivers {
 namespace {
 
 using device::Status;
+using testing::BiclopsLineRig;
+using testing::BiclopsRig;
 namespace op = pmd::op;
 
-// The head's line (BiclopsOptions: 9600 8N1).
-constexpr int kBaud = 9600;
 // One encoder count of the default head, rad (12000 counts per turn).
 constexpr double kCount = 2.0 * 3.14159265358979323846 / 12000.0;
 
 double Since(const Clock& clock, Clock::TimePoint t0) { return Clock::ToSeconds(clock.Now() - t0); }
-
-BiclopsEmulator& Emu(DeviceEmulator& d) { return dynamic_cast<BiclopsEmulator&>(d); }
-
-std::vector<PmdExecuted> Log(SimLine& line) {
-  return line.With([](DeviceEmulator& d) { return Emu(d).executed(); });
-}
-
-double ChipCounts(SimLine& line, int axis) {
-  return line.With([axis](DeviceEmulator& d) { return Emu(d).chip().position_counts(axis); });
-}
-
-bool ChipMoving(SimLine& line, int axis) {
-  return line.With([axis](DeviceEmulator& d) { return Emu(d).chip().moving(axis); });
-}
 
 // Reads until the head stops (or `timeout_s` of simulated time).
 device::HeadState WaitStill(BiclopsHead& head, const Clock& clock, double timeout_s = 10.0) {
@@ -111,19 +97,18 @@ class ScriptedLink final : public ByteLink {
 // under way, as on a slow line.
 class HeldStatusLink final : public ByteLink {
  public:
-  HeldStatusLink(std::unique_ptr<ByteLink> inner, SimLine* line)
-      : inner_(std::move(inner)), line_(line) {}
+  HeldStatusLink(std::unique_ptr<ByteLink> inner, BiclopsLineRig* rig)
+      : inner_(std::move(inner)), rig_(rig) {}
   void HoldNextStatus() { hold_ = true; }
   bool held() const { return held_; }
   Status Write(std::span<const std::uint8_t> bytes) override {
     if (hold_ && bytes.size() == 4 && bytes[2] == 0 && bytes[3] == op::kGetActivityStatus) {
       hold_ = false;
-      SimClock& clock = line_->clock();
-      const Clock::TimePoint t0 = clock.Now();
-      while (ChipMoving(*line_, 0) && Since(clock, t0) < 5.0) {
-        clock.SleepFor(std::chrono::milliseconds(2));
+      const Clock::TimePoint t0 = rig_->clock.Now();
+      while (rig_->ChipMoving(0) && rig_->Since(t0) < 5.0) {
+        rig_->clock.SleepFor(std::chrono::milliseconds(2));
       }
-      held_ = !ChipMoving(*line_, 0);
+      held_ = !rig_->ChipMoving(0);
     }
     return inner_->Write(bytes);
   }
@@ -134,7 +119,7 @@ class HeldStatusLink final : public ByteLink {
 
  private:
   std::unique_ptr<ByteLink> inner_;
-  SimLine* line_;
+  BiclopsLineRig* rig_;
   bool hold_ = false, held_ = false;
 };
 
@@ -162,21 +147,20 @@ TEST(BiclopsHead, EachDamagedExchangeLeavesTheCommandExecutedOnce) {
   for (const Case& c : cases) {
     SCOPED_TRACE(std::string(pmd::FindOpcode(c.opcode)->name) + " fault " +
                  std::to_string(static_cast<int>(c.fault)) + (c.moving ? " moving" : ""));
-    SimClock clock;
-    SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-    auto scripted = std::make_unique<ScriptedLink>(line.Open());
+    BiclopsLineRig rig;
+    auto scripted = std::make_unique<ScriptedLink>(rig.Open());
     ScriptedLink* link = scripted.get();
-    BiclopsHead head(std::move(scripted), DefaultBiclopsOptions(), clock);
+    BiclopsHead head(std::move(scripted), DefaultBiclopsOptions(), rig.clock);
     if (c.opcode != op::kSetVelocity) {
       ASSERT_EQ(head.Initialize(), Status::kOk);
     }
     if (c.moving) {
       ASSERT_EQ(head.MoveTo({0.3, 0.05, 0.1}), Status::kOk);
     }
-    const std::size_t before = Log(line).size();
+    const std::size_t before = rig.Log().size();
     link->Arm(c.opcode, c.fault);
     ASSERT_EQ(head.MoveTo({-0.1, 0.0, 0.0}), Status::kOk);
-    const std::vector<PmdExecuted> log = Log(line);
+    const std::vector<PmdExecuted> log = rig.Log();
     // Exactly the commands of this move, each once.
     std::vector<PmdExecuted> expect(log.begin(), log.begin() + static_cast<std::ptrdiff_t>(before));
     if (c.opcode == op::kSetVelocity) {
@@ -191,7 +175,7 @@ TEST(BiclopsHead, EachDamagedExchangeLeavesTheCommandExecutedOnce) {
     }
     for (int a = 0; a < moved; ++a) expect.push_back({0, a, op::kUpdate, 0});
     EXPECT_EQ(log, expect);
-    const device::HeadState s = WaitStill(head, clock);
+    const device::HeadState s = WaitStill(head, rig.clock);
     EXPECT_NEAR(s.q.pan, -0.1, 1e-3);
     EXPECT_NEAR(s.q.tilt, 0.0, 1e-3);
     const BiclopsCounters k = head.counters();
@@ -206,70 +190,66 @@ TEST(BiclopsHead, EachDamagedExchangeLeavesTheCommandExecutedOnce) {
 }
 
 TEST(BiclopsHead, InitializeReadsTheChipAndSetsTheProfile) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.Initialize(), Status::kOk);
-  EXPECT_EQ(head.version_chip(), 0x2130);
-  EXPECT_EQ(head.version_software(), 0x0015);
-  EXPECT_DOUBLE_EQ(head.cycle_s(), 153e-6);
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.Initialize(), Status::kOk);
+  EXPECT_EQ(rig.head.version_chip(), 0x2130);
+  EXPECT_EQ(rig.head.version_software(), 0x0015);
+  EXPECT_DOUBLE_EQ(rig.head.cycle_s(), 153e-6);
   // Pan 150 deg/s = 5000 counts/s: 5000 * 153e-6 * 65536 = 50135.0; 300 deg/s^2 = 10000
   // counts/s^2: 10000 * 153e-6^2 * 65536 = 15.3.
-  EXPECT_EQ(head.velocity_register(0), 50135);
-  EXPECT_EQ(head.acceleration_register(0), 15u);
+  EXPECT_EQ(rig.head.velocity_register(0), 50135);
+  EXPECT_EQ(rig.head.acceleration_register(0), 15u);
   // Tilt 80 deg/s^2: 4.09 -> 4; verge 100 deg/s: 33423.4 -> 33423.
-  EXPECT_EQ(head.acceleration_register(1), 4u);
-  EXPECT_EQ(head.velocity_register(2), 33423);
+  EXPECT_EQ(rig.head.acceleration_register(1), 4u);
+  EXPECT_EQ(rig.head.velocity_register(2), 33423);
   // Profile mode is trapezoidal at power-up already: not sent. Velocity and acceleration once.
   std::vector<PmdExecuted> expect;
   for (int a = 0; a < 3; ++a) {
-    expect.push_back({0, a, op::kSetVelocity, head.velocity_register(a)});
-    expect.push_back({0, a, op::kSetAcceleration, head.acceleration_register(a)});
+    expect.push_back({0, a, op::kSetVelocity, rig.head.velocity_register(a)});
+    expect.push_back({0, a, op::kSetAcceleration, rig.head.acceleration_register(a)});
   }
-  EXPECT_EQ(Log(line), expect);
+  EXPECT_EQ(rig.Log(), expect);
   // Again: nothing differs, nothing is sent.
-  BiclopsHead again(line.Open(), DefaultBiclopsOptions(), clock);
+  BiclopsHead again(rig.Open(), DefaultBiclopsOptions(), rig.clock);
   ASSERT_EQ(again.Initialize(), Status::kOk);
-  EXPECT_EQ(Log(line), expect);
+  EXPECT_EQ(rig.Log(), expect);
 }
 
 TEST(BiclopsHead, MoveToReachesTheTargetsAndReadFollows) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
+  BiclopsRig rig;
   const device::HeadJoints target{0.5, -0.3, 0.2};
-  const Clock::TimePoint t0 = clock.Now();
-  ASSERT_EQ(head.MoveTo(target), Status::kOk);
-  const double command_s = Since(clock, t0);
+  const Clock::TimePoint t0 = rig.clock.Now();
+  ASSERT_EQ(rig.head.MoveTo(target), Status::kOk);
+  const double command_s = rig.Since(t0);
   device::HeadState s;
-  ASSERT_EQ(head.Read(&s), Status::kOk);
+  ASSERT_EQ(rig.head.Read(&s), Status::kOk);
   EXPECT_TRUE(s.moving);
-  s = WaitStill(head, clock);
+  s = WaitStill(rig.head, rig.clock);
   EXPECT_FALSE(s.moving);
   EXPECT_NEAR(s.q.pan, 0.5, kCount);
   EXPECT_NEAR(s.q.tilt, -0.3, kCount);
   EXPECT_NEAR(s.q.verge, 0.2, kCount);
   EXPECT_GT(s.t_s, 0.0);
-  const std::array<std::int32_t, 3> counts = head.ToCounts(target);
+  const std::array<std::int32_t, 3> counts = rig.head.ToCounts(target);
   EXPECT_EQ(counts[0], 955);  // 0.5 rad * 12000 / 2 pi = 954.93
-  for (int a = 0; a < 3; ++a) EXPECT_DOUBLE_EQ(ChipCounts(line, a), counts[a]);
+  for (int a = 0; a < 3; ++a) EXPECT_DOUBLE_EQ(rig.ChipCounts(a), counts[a]);
   // The log: initialisation, then the three targets, then the three Updates.
-  std::vector<PmdExecuted> log = Log(line);
+  std::vector<PmdExecuted> log = rig.Log();
   ASSERT_EQ(log.size(), 12u);
   for (int a = 0; a < 3; ++a) {
     EXPECT_EQ(log[6 + a], (PmdExecuted{0, a, op::kSetPosition, counts[a]}));
     EXPECT_EQ(log[9 + a], (PmdExecuted{0, a, op::kUpdate, 0}));
   }
   // The same target again changes nothing: nothing is sent.
-  ASSERT_EQ(head.MoveTo(target), Status::kOk);
-  EXPECT_EQ(Log(line).size(), 12u);
+  ASSERT_EQ(rig.head.MoveTo(target), Status::kOk);
+  EXPECT_EQ(rig.Log().size(), 12u);
   // A new pan target alone moves pan alone.
-  ASSERT_EQ(head.MoveTo({-0.5, -0.3, 0.2}), Status::kOk);
-  log = Log(line);
+  ASSERT_EQ(rig.head.MoveTo({-0.5, -0.3, 0.2}), Status::kOk);
+  log = rig.Log();
   ASSERT_EQ(log.size(), 14u);
   EXPECT_EQ(log[12], (PmdExecuted{0, 0, op::kSetPosition, -955}));
   EXPECT_EQ(log[13], (PmdExecuted{0, 0, op::kUpdate, 0}));
-  s = WaitStill(head, clock);
+  s = WaitStill(rig.head, rig.clock);
   EXPECT_NEAR(s.q.pan, -0.5, kCount);
   std::printf("MoveTo (first, with initialisation) took %.1f ms\n", command_s * 1e3);
 }
@@ -278,11 +258,10 @@ TEST(BiclopsHead, AHeadReadAtRestIsWhereItStopped) {
   // The pan profile ends while a Read is under way. Reading the position before the status
   // reported a head at rest at an angle it had passed (pan about 0 of 0.1 rad here). The move
   // takes 0.28 s, within the driver's 0.4 s silence limit.
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  auto held = std::make_unique<HeldStatusLink>(line.Open(), &line);
+  BiclopsLineRig rig;
+  auto held = std::make_unique<HeldStatusLink>(rig.Open(), &rig);
   HeldStatusLink* link = held.get();
-  BiclopsHead head(std::move(held), DefaultBiclopsOptions(), clock);
+  BiclopsHead head(std::move(held), DefaultBiclopsOptions(), rig.clock);
   ASSERT_EQ(head.Initialize(), Status::kOk);
   ASSERT_EQ(head.MoveTo({0.1, 0.0, 0.0}), Status::kOk);
   link->HoldNextStatus();
@@ -294,10 +273,8 @@ TEST(BiclopsHead, AHeadReadAtRestIsWhereItStopped) {
 }
 
 TEST(BiclopsHead, MovesAtTheSpeedLimit) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.Initialize(), Status::kOk);
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.Initialize(), Status::kOk);
   // Pan 3 rad (171.9 deg) at 150 deg/s, 300 deg/s^2: two 0.5 s ramps (75 deg) and 96.9 deg of
   // cruise (0.646 s): 1.646 s. Twice the speed would take 1.514 s (a triangle), half the speed
   // 2.542 s, half the acceleration 2.146 s. The emulated chip starts the profile no earlier than
@@ -305,10 +282,10 @@ TEST(BiclopsHead, MovesAtTheSpeedLimit) {
   // the wall clock it left 0.4 s: 2.05 s), only for the line: measured 1.771 s, the MoveTo's 9
   // exchanges on the 9600-baud line (83 ms), the chip's profile (1.657 s: the acceleration
   // register holds 15, not 15.3) and the Reads' polling (30 ms).
-  const Clock::TimePoint t0 = clock.Now();
-  ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
-  const device::HeadState s = WaitStill(head, clock);
-  const double took = Since(clock, t0);
+  const Clock::TimePoint t0 = rig.clock.Now();
+  ASSERT_EQ(rig.head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
+  const device::HeadState s = WaitStill(rig.head, rig.clock);
+  const double took = rig.Since(t0);
   std::printf("a 3 rad pan move read at rest after %.4f s\n", took);
   EXPECT_NEAR(s.q.pan, 3.0, kCount);
   EXPECT_GT(took, 1.6);
@@ -316,19 +293,17 @@ TEST(BiclopsHead, MovesAtTheSpeedLimit) {
 }
 
 TEST(BiclopsHead, RejectsTargetsOutsideTheRangeWithoutSending) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.Initialize(), Status::kOk);
-  const std::size_t before = Log(line).size();
-  EXPECT_EQ(head.MoveTo({0.0, 1.2, 0.0}), Status::kRejected);   // tilt > 60 deg
-  EXPECT_EQ(head.MoveTo({0.0, 0.0, -0.2}), Status::kRejected);  // verge < -5 deg
-  EXPECT_EQ(head.MoveTo({NAN, 0.0, 0.0}), Status::kRejected);
-  EXPECT_EQ(Log(line).size(), before);
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.Initialize(), Status::kOk);
+  const std::size_t before = rig.Log().size();
+  EXPECT_EQ(rig.head.MoveTo({0.0, 1.2, 0.0}), Status::kRejected);   // tilt > 60 deg
+  EXPECT_EQ(rig.head.MoveTo({0.0, 0.0, -0.2}), Status::kRejected);  // verge < -5 deg
+  EXPECT_EQ(rig.head.MoveTo({NAN, 0.0, 0.0}), Status::kRejected);
+  EXPECT_EQ(rig.Log().size(), before);
   // The ends of the ranges are inside.
-  EXPECT_EQ(head.MoveTo({-3.14159265358979323846, 1.0471975511965976, -0.08726646259971647}),
+  EXPECT_EQ(rig.head.MoveTo({-3.14159265358979323846, 1.0471975511965976, -0.08726646259971647}),
             Status::kOk);
-  const device::HeadState s = WaitStill(head, clock);
+  const device::HeadState s = WaitStill(rig.head, rig.clock);
   EXPECT_NEAR(s.q.verge, -0.0872665, 3e-4);
 }
 
@@ -345,69 +320,63 @@ TEST(BiclopsHead, BadOptionsNameTheField) {
 }
 
 TEST(BiclopsHead, ResetIsSentOnceAndTheHeadRecovers) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.MoveTo({0.1, 0.1, 0.1}), Status::kOk);
-  WaitStill(head, clock);
-  ASSERT_EQ(head.ResetChip(), Status::kOk);
-  EXPECT_EQ(line.With([](DeviceEmulator& d) { return Emu(d).chip().resets(); }), 1);
-  std::vector<PmdExecuted> log = Log(line);
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.MoveTo({0.1, 0.1, 0.1}), Status::kOk);
+  WaitStill(rig.head, rig.clock);
+  ASSERT_EQ(rig.head.ResetChip(), Status::kOk);
+  EXPECT_EQ(rig.With([](BiclopsEmulator& e) { return e.chip().resets(); }), 1);
+  std::vector<PmdExecuted> log = rig.Log();
   ASSERT_EQ(log.back(), (PmdExecuted{0, 0, op::kReset, 0}));
   // The counters restart at 0 where the head stands (0.1 rad): it reads 0 now.
   device::HeadState s;
-  ASSERT_EQ(head.Read(&s), Status::kOk);
+  ASSERT_EQ(rig.head.Read(&s), Status::kOk);
   EXPECT_NEAR(s.q.pan, 0.0, 1e-3);
   // The next move initialises the profile again and moves relative to the new zero.
-  ASSERT_EQ(head.MoveTo({0.05, 0.0, 0.0}), Status::kOk);
-  s = WaitStill(head, clock);
+  ASSERT_EQ(rig.head.MoveTo({0.05, 0.0, 0.0}), Status::kOk);
+  s = WaitStill(rig.head, rig.clock);
   EXPECT_NEAR(s.q.pan, 0.05, 1e-3);
-  EXPECT_NEAR(ChipCounts(line, 0),
+  EXPECT_NEAR(rig.ChipCounts(0),
               std::round(0.1 * 12000 / (2 * 3.14159265358979323846)) +
                   std::round(0.05 * 12000 / (2 * 3.14159265358979323846)),
               1.0);
 }
 
 TEST(BiclopsHead, CutCableIsReportedWithinHalfASecondAndRecovers) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.Initialize(), Status::kOk);
-  line.Cut(true);
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.Initialize(), Status::kOk);
+  rig.line().Cut(true);
   device::HeadState s;
-  Clock::TimePoint t0 = clock.Now();
-  EXPECT_EQ(head.Read(&s), Status::kTimeout);
-  const double read_s = Since(clock, t0);
-  t0 = clock.Now();
-  EXPECT_EQ(head.MoveTo({0.2, 0.0, 0.0}), Status::kTimeout);
-  const double move_s = Since(clock, t0);
+  Clock::TimePoint t0 = rig.clock.Now();
+  EXPECT_EQ(rig.head.Read(&s), Status::kTimeout);
+  const double read_s = rig.Since(t0);
+  t0 = rig.clock.Now();
+  EXPECT_EQ(rig.head.MoveTo({0.2, 0.0, 0.0}), Status::kTimeout);
+  const double move_s = rig.Since(t0);
   std::printf("cut cable reported after %.0f ms (Read), %.0f ms (MoveTo)\n", read_s * 1e3,
               move_s * 1e3);
   EXPECT_LT(read_s, 0.5);
   EXPECT_LT(move_s, 0.5);
-  EXPECT_EQ(Log(line).size(), 6u);  // nothing reached the chip
-  line.Cut(false);
-  ASSERT_EQ(head.MoveTo({0.2, 0.0, 0.0}), Status::kOk);
-  s = WaitStill(head, clock);
+  EXPECT_EQ(rig.Log().size(), 6u);  // nothing reached the chip
+  rig.line().Cut(false);
+  ASSERT_EQ(rig.head.MoveTo({0.2, 0.0, 0.0}), Status::kOk);
+  s = WaitStill(rig.head, rig.clock);
   EXPECT_NEAR(s.q.pan, 0.2, 1e-3);
-  EXPECT_EQ(Log(line).size(), 8u);  // one SetPosition, one Update
+  EXPECT_EQ(rig.Log().size(), 8u);  // one SetPosition, one Update
 }
 
 TEST(BiclopsHead, VanishedPortIsReportedAndTheDriverReconnects) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.MoveTo({0.3, 0.0, 0.0}), Status::kOk);
-  line.Vanish();
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.MoveTo({0.3, 0.0, 0.0}), Status::kOk);
+  rig.line().Vanish();
   device::HeadState s;
-  Clock::TimePoint t0 = clock.Now();
-  const Status gone = head.Read(&s);
-  const double read_s = Since(clock, t0);
+  Clock::TimePoint t0 = rig.clock.Now();
+  const Status gone = rig.head.Read(&s);
+  const double read_s = rig.Since(t0);
   // On a pty the hang-up may first show as a silent line (kTimeout); here it is seen at once.
   EXPECT_EQ(gone, Status::kDisconnected) << ToString(gone);
-  t0 = clock.Now();
-  const Status gone2 = head.MoveTo({-0.3, 0.0, 0.0});
-  const double move_s = Since(clock, t0);
+  t0 = rig.clock.Now();
+  const Status gone2 = rig.head.MoveTo({-0.3, 0.0, 0.0});
+  const double move_s = rig.Since(t0);
   EXPECT_EQ(gone2, Status::kDisconnected) << ToString(gone2);
   std::printf("vanished port reported after %.0f ms (Read, %s), %.0f ms (MoveTo, %s)\n",
               read_s * 1e3, std::string(ToString(gone)).c_str(), move_s * 1e3,
@@ -416,21 +385,21 @@ TEST(BiclopsHead, VanishedPortIsReportedAndTheDriverReconnects) {
   // MoveTo's reopen attempt took 20 ms): a vanished port is no silence to wait out.
   EXPECT_LT(read_s, 0.001);
   EXPECT_LT(move_s, 0.001);
-  line.Reappear();
+  rig.line().Reappear();
   Status back = Status::kDisconnected;
-  t0 = clock.Now();
-  for (int n = 0; n < 100 && back != Status::kOk && Since(clock, t0) < 3.0; ++n) {
-    back = head.MoveTo({-0.3, 0.0, 0.0});
+  t0 = rig.clock.Now();
+  for (int n = 0; n < 100 && back != Status::kOk && rig.Since(t0) < 3.0; ++n) {
+    back = rig.head.MoveTo({-0.3, 0.0, 0.0});
   }
   ASSERT_EQ(back, Status::kOk);
-  s = WaitStill(head, clock);
+  s = WaitStill(rig.head, rig.clock);
   EXPECT_NEAR(s.q.pan, -0.3, 1e-3);
   // The chip kept its registers: after reading them again the driver sent only the new move.
-  const std::vector<PmdExecuted> log = Log(line);
+  const std::vector<PmdExecuted> log = rig.Log();
   ASSERT_EQ(log.size(), 10u);
   EXPECT_EQ(log[8].opcode, op::kSetPosition);
   EXPECT_EQ(log[9].opcode, op::kUpdate);
-  EXPECT_GE(head.counters().disconnects, 1u);
+  EXPECT_GE(rig.head.counters().disconnects, 1u);
 }
 
 TEST(BiclopsHead, OneDropoutAtAnyMomentOfA9600BaudLineIsNoLostLink) {
@@ -440,25 +409,23 @@ TEST(BiclopsHead, OneDropoutAtAnyMomentOfA9600BaudLineIsNoLostLink) {
   // twin a late-ending dropout cost a second resync round of zeros at 20 ms each, the chip
   // silent 0.37 s, and 4 homings of 5 failed at 1 dropout/s; neither over a pty nor on this
   // simulated line does this test reproduce that: it passes with the old zero wait too.)
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.Initialize(), Status::kOk);
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.Initialize(), Status::kOk);
   int reads = 0, lost = 0;
   for (int k = 0; k < 24; ++k) {
     // A moving head: every Read asks the chip (one known at rest is answered from memory).
-    ASSERT_EQ(head.MoveTo({k % 2 == 0 ? 1.0 : -1.0, 0.0, 0.0}), Status::kOk);
-    const Clock::TimePoint cut = clock.Now() + std::chrono::milliseconds(7 * k);
+    ASSERT_EQ(rig.head.MoveTo({k % 2 == 0 ? 1.0 : -1.0, 0.0, 0.0}), Status::kOk);
+    const Clock::TimePoint cut = rig.clock.Now() + std::chrono::milliseconds(7 * k);
     bool done = false;
-    clock.At(cut, [&line] { line.Cut(true); });
-    clock.At(cut + std::chrono::milliseconds(200), [&line, &done] {
-      line.Cut(false);
+    rig.clock.At(cut, [&rig] { rig.line().Cut(true); });
+    rig.clock.At(cut + std::chrono::milliseconds(200), [&rig, &done] {
+      rig.line().Cut(false);
       done = true;
     });
     while (!done) {
       device::HeadState s;
       ++reads;
-      if (head.Read(&s) != Status::kOk) {
+      if (rig.head.Read(&s) != Status::kOk) {
         ++lost;
       } else {
         // At rest its Reads would take no time on the line, and the dropout would never end.
@@ -469,30 +436,28 @@ TEST(BiclopsHead, OneDropoutAtAnyMomentOfA9600BaudLineIsNoLostLink) {
   std::printf("%d reads through 24 dropouts, %d lost\n", reads, lost);
   EXPECT_EQ(lost, 0);
   device::HeadState s;
-  EXPECT_EQ(head.Read(&s), Status::kOk);
+  EXPECT_EQ(rig.head.Read(&s), Status::kOk);
 }
 
 TEST(BiclopsHead, StopHaltsEveryAxisWhereItIsAndTheNextMoveGoesOn) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
-  clock.SleepFor(std::chrono::milliseconds(400));
-  ASSERT_EQ(head.Stop(), Status::kOk);
+  BiclopsRig rig;
+  ASSERT_EQ(rig.head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
+  rig.clock.SleepFor(std::chrono::milliseconds(400));
+  ASSERT_EQ(rig.head.Stop(), Status::kOk);
   // Stopped means at rest when Stop returns: the safe stop's report says so, and the process
   // may exit right after it. (Before: kOk while the servo still braked the axis.)
-  EXPECT_FALSE(ChipMoving(line, 0));
-  device::HeadState s = WaitStill(head, clock, 2.0);
+  EXPECT_FALSE(rig.ChipMoving(0));
+  device::HeadState s = WaitStill(rig.head, rig.clock, 2.0);
   EXPECT_FALSE(s.moving);
   EXPECT_GT(s.q.pan, 0.1);
   EXPECT_LT(s.q.pan, 2.9);  // stopped on the way (3 rad takes 1.6 s)
   // The same target again: the chip still has it buffered, one Update sends the head on.
-  const std::size_t before = Log(line).size();
-  ASSERT_EQ(head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
-  const std::vector<PmdExecuted> log = Log(line);
+  const std::size_t before = rig.Log().size();
+  ASSERT_EQ(rig.head.MoveTo({3.0, 0.0, 0.0}), Status::kOk);
+  const std::vector<PmdExecuted> log = rig.Log();
   ASSERT_EQ(log.size(), before + 1);
   EXPECT_EQ(log.back(), (PmdExecuted{0, 0, op::kUpdate, 0}));
-  s = WaitStill(head, clock);
+  s = WaitStill(rig.head, rig.clock);
   EXPECT_NEAR(s.q.pan, 3.0, kCount);
 }
 

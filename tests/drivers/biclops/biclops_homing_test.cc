@@ -23,28 +23,17 @@
 #include "common/clock.h"
 #include "common/error.h"
 #include "emulators/biclops_emulator.h"
-#include "emulators/sim_line.h"
 #include "serial/faulty_link.h"
+#include "tests/drivers/biclops/biclops_rig.h"
 
 namespace hgrasp::drivers {
 namespace {
 
 using device::Status;
+using testing::BiclopsLineRig;
+using testing::BiclopsRig;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kCountsPerDeg = 12000.0 / 360.0;
-constexpr int kBaud = 9600;
-
-// Simulated seconds since `t0`.
-double Since(const Clock& clock, Clock::TimePoint t0) { return Clock::ToSeconds(clock.Now() - t0); }
-
-template <class F>
-auto Chip(SimLine& line, F&& f) {
-  return line.With([&](DeviceEmulator& d) { return f(dynamic_cast<BiclopsEmulator&>(d)); });
-}
-
-double TruePosition(SimLine& line, int a) {
-  return Chip(line, [a](BiclopsEmulator& e) { return e.chip().position_counts(a); });
-}
 
 // The vendor's axes (BiclopsDefault.cfg), with homing and run profiles fast enough for a test:
 // 120 deg/s and 600 deg/s^2 (the emulated motors' limits are 150 deg/s and 600 deg/s^2).
@@ -66,20 +55,19 @@ std::array<VendorAxisConfig, 3> VendorAxes() {
 
 TEST(BiclopsVendorHost, InitializesHomesMovesAndReadsAllThreeAxes) {
   const BiclopsEmulatorConfig config = PoweredUpBiclopsEmulatorConfig(3);
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(config), kBaud);
-  VendorHost vendor(line.Open(), clock);
-  const Clock::TimePoint t0 = clock.Now();
+  BiclopsLineRig rig(config);
+  VendorHost vendor(rig.Open(), rig.clock);
+  const Clock::TimePoint t0 = rig.clock.Now();
   ASSERT_TRUE(vendor.Initialize(VendorAxes())) << vendor.error();
   ASSERT_TRUE(vendor.HomeAxes()) << vendor.error();
-  const double homing_s = Since(clock, t0);
+  const double homing_s = rig.Since(t0);
   // Homed: each axis stands at its true home, and its encoder reads 0 there.
   for (int a = 0; a < 3; ++a) {
     SCOPED_TRACE(a);
     std::int32_t counts = -1;
     ASSERT_TRUE(vendor.ReadPosition(a, &counts)) << vendor.error();
     EXPECT_EQ(counts, 0);
-    EXPECT_NEAR(TruePosition(line, a), 0.0, 1.0);
+    EXPECT_NEAR(rig.ChipCounts(a), 0.0, 1.0);
     // The zero was found where the head powered up away from home.
     EXPECT_EQ(vendor.zero_position(a), -static_cast<std::int32_t>(config.start_counts[a]));
   }
@@ -90,7 +78,7 @@ TEST(BiclopsVendorHost, InitializesHomesMovesAndReadsAllThreeAxes) {
     std::int32_t counts = 0;
     ASSERT_TRUE(vendor.ReadPosition(a, &counts)) << vendor.error();
     EXPECT_EQ(counts, target[a]);
-    EXPECT_EQ(TruePosition(line, a), target[a]);
+    EXPECT_EQ(rig.ChipCounts(a), target[a]);
   }
 
   // An opcode libPMD's table does not have (0x01), with two argument words, in the middle of
@@ -117,7 +105,7 @@ TEST(BiclopsVendorHost, InitializesHomesMovesAndReadsAllThreeAxes) {
     ASSERT_TRUE(vendor.ReadPosition(a, &counts)) << vendor.error();
     EXPECT_EQ(counts, 0);
   }
-  const BiclopsEmulator::Counts k = Chip(line, [](BiclopsEmulator& e) { return e.counts(); });
+  const BiclopsEmulator::Counts k = rig.With([](BiclopsEmulator& e) { return e.counts(); });
   EXPECT_EQ(k.checksum_errors, 0u);
   EXPECT_EQ(k.invalid_instructions, 2u);
   std::printf("vendor host: %d packets, homing took %.3f s (start %.0f %.0f %.0f counts)\n",
@@ -138,45 +126,43 @@ TEST(BiclopsHomingDriver, HomesThePoweredUpHeadToWithinOneCount) {
   for (std::uint64_t seed : {1u, 7u}) {
     SCOPED_TRACE(seed);
     const BiclopsEmulatorConfig config = PoweredUpBiclopsEmulatorConfig(seed);
-    SimClock clock;
-    SimLine line(clock, std::make_unique<BiclopsEmulator>(config), kBaud);
-    BiclopsHead head(line.Open(), FastHoming(), clock);
+    BiclopsRig rig(config, FastHoming());
     // Before homing the head reads 0 wherever it stands.
     device::HeadState s;
-    ASSERT_EQ(head.Read(&s), Status::kOk);
+    ASSERT_EQ(rig.head.Read(&s), Status::kOk);
     EXPECT_EQ(s.q.pan, 0.0);
-    EXPECT_FALSE(head.homed());
-    const Clock::TimePoint t0 = clock.Now();
-    ASSERT_EQ(head.ConfigureAndHome(), Status::kOk) << head.last_error();
-    const double took = Since(clock, t0);
-    EXPECT_TRUE(head.homed());
-    EXPECT_EQ(head.last_error(), "");
-    ASSERT_EQ(head.Read(&s), Status::kOk);
+    EXPECT_FALSE(rig.head.homed());
+    const Clock::TimePoint t0 = rig.clock.Now();
+    ASSERT_EQ(rig.head.ConfigureAndHome(), Status::kOk) << rig.head.last_error();
+    const double took = rig.Since(t0);
+    EXPECT_TRUE(rig.head.homed());
+    EXPECT_EQ(rig.head.last_error(), "");
+    ASSERT_EQ(rig.head.Read(&s), Status::kOk);
     EXPECT_FALSE(s.moving);
     double worst = 0.0;
     const double q[3] = {s.q.pan, s.q.tilt, s.q.verge};
     for (int a = 0; a < 3; ++a) {
-      const double truth = TruePosition(line, a);
+      const double truth = rig.ChipCounts(a);
       EXPECT_NEAR(truth, 0.0, 1.0) << "axis " << a;
       EXPECT_NEAR(q[a], 0.0, 2.0 * kPi / 12000.0 + 1e-12);  // one count
       worst = std::max(worst, std::abs(truth));
     }
     // The configuration reached the chip (libPMD's values: signal sense, filter, output mode).
-    EXPECT_EQ(
-        Chip(line,
-             [](BiclopsEmulator& e) { return e.chip().EventStatus(0) & pmd::event::kMotionError; }),
-        0);
+    EXPECT_EQ(rig.With([](BiclopsEmulator& e) {
+      return e.chip().EventStatus(0) & pmd::event::kMotionError;
+    }),
+              0);
     // Then moves land where device/head.h says, in the true frame.
     const device::HeadJoints target{0.4, -0.2, 0.1};
-    ASSERT_EQ(head.MoveTo(target), Status::kOk);
-    const Clock::TimePoint t1 = clock.Now();
+    ASSERT_EQ(rig.head.MoveTo(target), Status::kOk);
+    const Clock::TimePoint t1 = rig.clock.Now();
     do {
-      ASSERT_EQ(head.Read(&s), Status::kOk);
-    } while (s.moving && Since(clock, t1) < 10.0);
-    const double move_s = Since(clock, t1);
+      ASSERT_EQ(rig.head.Read(&s), Status::kOk);
+    } while (s.moving && rig.Since(t1) < 10.0);
+    const double move_s = rig.Since(t1);
     EXPECT_FALSE(s.moving) << "still moving after " << move_s << " s";
-    const std::array<std::int32_t, 3> counts = head.ToCounts(target);
-    for (int a = 0; a < 3; ++a) EXPECT_NEAR(TruePosition(line, a), counts[a], 1.0);
+    const std::array<std::int32_t, 3> counts = rig.head.ToCounts(target);
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(rig.ChipCounts(a), counts[a], 1.0);
     std::printf("seed %llu: homed in %.3f s, worst error %.0f counts (start %.0f %.0f %.0f)\n",
                 static_cast<unsigned long long>(seed), took, worst, config.start_counts[0],
                 config.start_counts[1], config.start_counts[2]);
@@ -187,46 +173,41 @@ TEST(BiclopsHomingDriver, HomesThePoweredUpHeadToWithinOneCount) {
 // deg/s at 10 deg/s^2, tilt and verge 15 deg/s at 20 deg/s^2): 30 s of simulated time (27 s of
 // wall time on a pty, so it was disabled), milliseconds of wall time here.
 TEST(BiclopsHomingDriver, HomesAtTheVendorsHomingProfiles) {
-  SimClock clock;
-  SimLine line(clock, MakeBiclopsEmulator(), kBaud);
-  BiclopsHead head(line.Open(), DefaultBiclopsOptions(), clock);
-  const Clock::TimePoint t0 = clock.Now();
-  ASSERT_EQ(head.ConfigureAndHome(), Status::kOk) << head.last_error();
-  for (int a = 0; a < 3; ++a) EXPECT_NEAR(TruePosition(line, a), 0.0, 1.0);
-  std::printf("homed at the vendor's profiles in %.3f s\n", Since(clock, t0));
+  BiclopsRig rig(PoweredUpBiclopsEmulatorConfig(1));  // as MakeBiclopsEmulator()
+  const Clock::TimePoint t0 = rig.clock.Now();
+  ASSERT_EQ(rig.head.ConfigureAndHome(), Status::kOk) << rig.head.last_error();
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(rig.ChipCounts(a), 0.0, 1.0);
+  std::printf("homed at the vendor's profiles in %.3f s\n", rig.Since(t0));
 }
 
 TEST(BiclopsHomingDriver, AHeadWithoutAnIndexPulseFailsInsteadOfHanging) {
   BiclopsEmulatorConfig config = PoweredUpBiclopsEmulatorConfig(5);
   config.has_index[1] = false;  // tilt: a dead index channel
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(config), kBaud);
-  BiclopsHead head(line.Open(), FastHoming(), clock);
-  const Clock::TimePoint t0 = clock.Now();
-  EXPECT_EQ(head.ConfigureAndHome(), Status::kRejected);
-  const double took = Since(clock, t0);
-  EXPECT_FALSE(head.homed());
-  EXPECT_NE(head.last_error().find("tilt"), std::string::npos) << head.last_error();
-  EXPECT_NE(head.last_error().find("index"), std::string::npos) << head.last_error();
+  BiclopsRig rig(config, FastHoming());
+  const Clock::TimePoint t0 = rig.clock.Now();
+  EXPECT_EQ(rig.head.ConfigureAndHome(), Status::kRejected);
+  const double took = rig.Since(t0);
+  EXPECT_FALSE(rig.head.homed());
+  EXPECT_NE(rig.head.last_error().find("tilt"), std::string::npos) << rig.head.last_error();
+  EXPECT_NE(rig.head.last_error().find("index"), std::string::npos) << rig.head.last_error();
   // Not a hang: 4.415 s in simulated time (the bound was 20 s in wall time).
   EXPECT_LT(took, 6.0);
-  std::printf("no tilt index: %s after %.3f s\n", head.last_error().c_str(), took);
+  std::printf("no tilt index: %s after %.3f s\n", rig.head.last_error().c_str(), took);
   // The link is still good: the head answers.
   device::HeadState s;
-  EXPECT_EQ(head.Read(&s), Status::kOk);
+  EXPECT_EQ(rig.head.Read(&s), Status::kOk);
 }
 
 TEST(BiclopsHomingDriver, ACutCableDuringHomingIsATimeoutNamingTheStep) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(PoweredUpBiclopsEmulatorConfig(2)), kBaud);
-  auto faulty = std::make_unique<FaultyLink>(line.Open(), FaultPlan{}, clock);
+  BiclopsLineRig rig(PoweredUpBiclopsEmulatorConfig(2));
+  auto faulty = std::make_unique<FaultyLink>(rig.Open(), FaultPlan{}, rig.clock);
   FaultyLink* cable = faulty.get();
-  BiclopsHead head(std::move(faulty), FastHoming(), clock);
+  BiclopsHead head(std::move(faulty), FastHoming(), rig.clock);
   // The cable is cut 1 s into homing, while an axis sweeps.
-  const Clock::TimePoint t0 = clock.Now();
-  clock.At(t0 + std::chrono::seconds(1), [cable] { cable->Cut(true); });
+  const Clock::TimePoint t0 = rig.clock.Now();
+  rig.clock.At(t0 + std::chrono::seconds(1), [cable] { cable->Cut(true); });
   const Status s = head.ConfigureAndHome();
-  const double took = Since(clock, t0);
+  const double took = rig.Since(t0);
   EXPECT_EQ(s, Status::kTimeout) << device::ToString(s);
   // The silence limit (0.4 s) after the last byte heard, then one line probe (a resync round
   // the chip leaves unanswered: 12 zero waits of 8.9 ms), not a hang: 1.507 s in simulated
@@ -282,16 +263,15 @@ class UpdateReplyEater final : public ByteLink {
 // after it: homing succeeds, and the chip executed exactly what the driver's command log says
 // (no Update twice).
 TEST(BiclopsHomingDriver, LostUpdateRepliesAreResolvedNeverSentTwice) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(PoweredUpBiclopsEmulatorConfig(1)), kBaud);
-  auto eater_owned = std::make_unique<UpdateReplyEater>(line.Open(), clock);
+  BiclopsLineRig rig(PoweredUpBiclopsEmulatorConfig(1));
+  auto eater_owned = std::make_unique<UpdateReplyEater>(rig.Open(), rig.clock);
   UpdateReplyEater* eater = eater_owned.get();
-  BiclopsHead head(std::move(eater_owned), FastHoming(), clock);
-  const Clock::TimePoint t0 = clock.Now();
+  BiclopsHead head(std::move(eater_owned), FastHoming(), rig.clock);
+  const Clock::TimePoint t0 = rig.clock.Now();
   ASSERT_EQ(head.ConfigureAndHome(), Status::kOk) << head.last_error();
-  const double took = Since(clock, t0);
+  const double took = rig.Since(t0);
   EXPECT_GT(eater->updates(), 20);
-  const std::vector<PmdExecuted> chip = Chip(line, [](BiclopsEmulator& e) { return e.executed(); });
+  const std::vector<PmdExecuted> chip = rig.With([](BiclopsEmulator& e) { return e.executed(); });
   const auto log = head.command_log().Snapshot();
   EXPECT_TRUE(LogExplains<pmd::Command>(log, chip, [](const pmd::Command& c, const PmdExecuted& x) {
     return c.axis == x.axis && c.opcode == x.opcode && pmd::CommandValue(c) == x.value;
@@ -493,29 +473,27 @@ struct NoisyHoming {
 // Homes the powered-up head (start positions from `seed` too) through the grasp run's line with
 // fault seed `seed`; poll_s > 0: through the twin's end polled that often (PolledLink).
 NoisyHoming HomeThroughNoise(std::uint64_t seed, double poll_s) {
-  SimClock clock;
-  SimLine line(clock, std::make_unique<BiclopsEmulator>(PoweredUpBiclopsEmulatorConfig(seed)),
-               kBaud);
-  std::unique_ptr<ByteLink> wire = line.Open();
-  if (poll_s > 0.0) wire = std::make_unique<PolledLink>(std::move(wire), clock, poll_s);
+  BiclopsLineRig rig(PoweredUpBiclopsEmulatorConfig(seed));
+  std::unique_ptr<ByteLink> wire = rig.Open();
+  if (poll_s > 0.0) wire = std::make_unique<PolledLink>(std::move(wire), rig.clock, poll_s);
   WireWitness witness;
   wire = std::make_unique<WitnessTap>(std::move(wire), &witness, /*below=*/true);
-  auto faulty = std::make_unique<FaultyLink>(std::move(wire), GraspRunLine(seed), clock);
+  auto faulty = std::make_unique<FaultyLink>(std::move(wire), GraspRunLine(seed), rig.clock);
   const FaultyLink* noisy = faulty.get();
   BiclopsHead head(std::make_unique<WitnessTap>(std::move(faulty), &witness, /*below=*/false),
-                   FastHoming(), clock);
+                   FastHoming(), rig.clock);
   NoisyHoming r;
-  const Clock::TimePoint t0 = clock.Now();
+  const Clock::TimePoint t0 = rig.clock.Now();
   r.status = head.ConfigureAndHome();
-  r.took_s = Since(clock, t0);
+  r.took_s = rig.Since(t0);
   r.error = head.last_error();
   r.counters = head.counters();
   r.dropouts = noisy->counts().dropouts;
   r.undetectable = witness.undetectable + (witness.ReplyAltered() ? 1 : 0);
   for (int a = 0; a < 3; ++a) {
-    r.worst_counts = std::max(r.worst_counts, std::abs(TruePosition(line, a)));
+    r.worst_counts = std::max(r.worst_counts, std::abs(rig.ChipCounts(a)));
   }
-  const std::vector<PmdExecuted> chip = Chip(line, [](BiclopsEmulator& e) { return e.executed(); });
+  const std::vector<PmdExecuted> chip = rig.With([](BiclopsEmulator& e) { return e.executed(); });
   r.log_ok = LogExplains<pmd::Command>(
       head.command_log().Snapshot(), chip, [](const pmd::Command& c, const PmdExecuted& x) {
         return c.axis == x.axis && c.opcode == x.opcode && pmd::CommandValue(c) == x.value;
