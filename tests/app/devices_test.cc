@@ -83,7 +83,11 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
   auto* biclops = dynamic_cast<drivers::BiclopsHead*>(dev.head.get());
   ASSERT_NE(biclops, nullptr);
   EXPECT_TRUE(biclops->homed());
-  EXPECT_FALSE(robot.start_failure.has_value());
+  // A start that failed says which device and what its driver said (once, beside two busy loops,
+  // it failed here with nothing to tell why).
+  EXPECT_FALSE(robot.start_failure.has_value())
+      << robot.start_failure->device << ": " << device::ToString(robot.start_failure->status)
+      << ", " << robot.start_failure->detail;
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(TrueCounts(head, a), 0.0, 1.0) << "axis " << a;
   // The stock SensorHand (no finger position on its wire), holding nothing, was opened to its
   // end stop: the driver's estimate is exact there.
@@ -130,7 +134,14 @@ TEST(MakeDevices, RealDriversWhereTheScenarioNamesThemSimulatedElsewhere) {
   device::Hand& right_hand = dev.HandOf(Side::kRight);
   ASSERT_EQ(right_hand.Open(0.06), Status::kOk);
   device::HandState hand_state;
-  EXPECT_TRUE(WaitFor([&] { return Ok(right_hand.Read(&hand_state)) && !hand_state.moving; }, 3.0));
+  Status last_read = Status::kOk;
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        last_read = right_hand.Read(&hand_state);
+        return Ok(last_read) && !hand_state.moving;
+      },
+      3.0))
+      << "the hand's last read: " << device::ToString(last_read);
   EXPECT_NEAR(hand_state.opening_m, 0.06, 0.002);
 
   device::Arm& left_arm = dev.ArmOf(Side::kLeft);
