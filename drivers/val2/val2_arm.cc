@@ -439,237 +439,269 @@ Status Val2Arm::Command(const std::string& line, bool is_stop, bool is_motion,
 Status Val2Arm::Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
                       LineOutcome* outcome, const Motion* check_motion) {
   *outcome = LineOutcome{};
-  bool armed = resume;    // the whole line may be in the controller's input, or have run
-  bool verified = false;  // a ^R answer showed exactly the line
-  // While armed: traces of a cancel, of an execution and of a message, in answers since.
-  bool cancel_trace = false, execution_trace = false, message_trace = false;
-  int suspect = 0;         // ^R answers near the line but not it, in a row
-  int errors = 0;          // lines that ran with "not understood"
-  bool gone_once = false;  // the line was found gone at the last turn, with no trace of a run
+  DriveState d{line, state_changing, check_motion, call, outcome, /*armed=*/resume};
   for (;;) {
     if (clock_->Now() >= call->Deadline()) {
-      if (state_changing && armed) pending_ = line;
-      if (opt_.trace) opt_.trace("timeout; armed " + std::to_string(armed));
+      if (state_changing && d.armed) pending_ = line;
+      if (opt_.trace) opt_.trace("timeout; armed " + std::to_string(d.armed));
       return Status::kTimeout;
     }
-    std::string send;
-    std::string expected;
-    double timeout = opt_.reply_timeout_s;
-    bool probe_again = false;
-    const bool armed_before = armed;
-    const bool gone_again = gone_once;
-    gone_once = false;
-    // The line has left the controller's input. Not when a retype shows the start of the line:
-    // a line that ran leaves the input empty, so that is a retype cut short by a dropout (bug
-    // fix, found by a simulated line's seed: "^R" damaged on its way back and cut short read as
-    // a run, and the command was reported done and lost). Unless two more looks show the same
-    // start after a trace of a run: no dropout cuts three retypes alike, so stray characters
-    // came after the run. (Bug fix, soak seed 12 with inserted bytes: a 'D' put into the empty
-    // line after the run, taken as the command's start, was typed on and ran the command twice.)
-    const bool start_shown = !RTrim(buf_).empty() && StartsWith(line, buf_);
-    const bool gone =
-        known_ && Gone(buf_, line) && (!start_shown || (armed && execution_trace && suspect >= 2));
-    if (!known_) {
-      send = val2::kCtrlR;  // what does the controller hold?
-      ++counters_.probes;
-      if (armed && std::find(guesses_.begin(), guesses_.end(), line) == guesses_.end()) {
-        guesses_.push_back(line);
-      }
-    } else if (armed && gone && cancel_trace && !execution_trace && !check_motion) {
-      armed = false;  // gone, and the answers show a cancel and no execution: it did not run
-      continue;
-    } else if (armed && gone && message_trace && !check_motion) {
-      // Gone, and an answer too damaged to classify held a message: the line that ran printed
-      // it, so it was not the command (which runs silently; a CR damaged into a character had
-      // left it with a character more) or the command refused. It did not take effect: typed
-      // again. (Taken as the command's silent run, the command was reported done and lost.)
-      armed = false;
-      continue;
-    } else if (armed && gone && state_changing && !execution_trace && !gone_again) {
-      // Gone with no trace of a run: the line ran with its answer lost, or a retype's answer
-      // was cut short by a dropout after its prompt ("^R" CR LF "." is also the retype of an
-      // empty line). Ask once more before taking it as run. (Bug fix, found by a simulated
-      // line's seed: the ^R that checks a typed command before its CR came back cut short; the
-      // driver took the command as run, reported it done, and cancelled it on the next call.)
-      gone_once = true;
-      send = val2::kCtrlR;
-      expected = val2::RetypeEcho("");
-      ++counters_.probes;
-    } else if (armed && gone) {
-      // The line has left the controller's input (seen twice, or with a trace of a run): it
-      // ran, and its answer was lost. (A line that never ran is still there, give or take a
-      // corrupted byte or two.)
-      if (!state_changing) {
-        armed = false;  // WHERE: just ask again
-        continue;
-      }
-      if (check_motion) {
-        // The whole answer lost: a silent run, a refusal's message or a cancel's echo look
-        // the same, and so do the traces of damaged answers. The arm rested and the move is
-        // visible: WHERE tells, whatever the traces.
-        bool moved = false;
-        const Status ms = MovedFromRest(clock_->Now(), *check_motion, call, &moved);
-        if (ms != Status::kOk) {
-          pending_ = line;  // a retry resumes it, and checks again
-          return ms;
-        }
-        ++counters_.motion_checks;
-        if (!moved) {
-          ++counters_.unrun_found;
-          if (opt_.trace) opt_.trace("gone, but the arm still rests: not run, typed again");
-          armed = false;
-          continue;
-        }
-      }
-      outcome->executed = true;
-      outcome->output_known = false;
-      return Status::kOk;
-    } else if (buf_ == line) {
-      armed = true;
-      if (state_changing && !verified) {
-        send = val2::kCtrlR;  // check the whole line once more before it runs
-        expected = val2::RetypeEcho(buf_);
-        ++counters_.probes;
-      } else {
-        send = val2::kCr;
-        expected = std::string("\r\n") + val2::kPrompt;
-      }
-    } else if (RTrim(buf_) == line) {
-      send = val2::kDel;  // the command and a blank (which VAL would ignore): rub it out
-      expected = std::string(val2::kRuboutEcho);
-      ++counters_.rubouts;
-    } else if (armed && suspect < 2) {
-      send = val2::kCtrlR;  // not the command, if this retype is right: look again
-      expected = val2::RetypeEcho(line);
-      probe_again = true;
+    Keys keys;
+    keys.timeout_s = opt_.reply_timeout_s;
+    Status s = Status::kOk;
+    Turn turn = NextKeys(&d, &keys, &s);
+    if (turn == Turn::kAgain) continue;
+    if (turn == Turn::kDone) return s;
+    d.suspect = keys.probe_again ? d.suspect + 1 : 0;
+    turn = TakeAnswer(&d, keys, &s);
+    if (turn == Turn::kDone) return s;
+  }
+}
+
+Val2Arm::Turn Val2Arm::NextKeys(DriveState* d, Keys* k, Status* s) {
+  const std::string& line = d->line;
+  k->armed_before = d->armed;
+  const bool gone_again = d->gone_once;
+  d->gone_once = false;
+  // The line has left the controller's input. Not when a retype shows the start of the line:
+  // a line that ran leaves the input empty, so that is a retype cut short by a dropout (bug
+  // fix, found by a simulated line's seed: "^R" damaged on its way back and cut short read as
+  // a run, and the command was reported done and lost). Unless two more looks show the same
+  // start after a trace of a run: no dropout cuts three retypes alike, so stray characters
+  // came after the run. (Bug fix, soak seed 12 with inserted bytes: a 'D' put into the empty
+  // line after the run, taken as the command's start, was typed on and ran the command twice.)
+  const bool start_shown = !RTrim(buf_).empty() && StartsWith(line, buf_);
+  const bool gone = known_ && Gone(buf_, line) &&
+                    (!start_shown || (d->armed && d->execution_trace && d->suspect >= 2));
+  if (!known_) {
+    k->send = val2::kCtrlR;  // what does the controller hold?
+    ++counters_.probes;
+    if (d->armed && std::find(guesses_.begin(), guesses_.end(), line) == guesses_.end()) {
+      guesses_.push_back(line);
+    }
+  } else if (d->armed && gone) {
+    return GoneLine(d, gone_again, k, s);
+  } else if (buf_ == line) {
+    d->armed = true;
+    if (d->state_changing && !d->verified) {
+      k->send = val2::kCtrlR;  // check the whole line once more before it runs
+      k->expected = val2::RetypeEcho(buf_);
       ++counters_.probes;
     } else {
-      // The controller holds something else than the command (seen more than once): it cannot
-      // run as the command. Type on, rub out, or start again.
-      armed = false;
-      if (StartsWith(line, buf_)) {
-        // A command's last character goes alone, once the rest is known to be right: with the
-        // rest typed in chunks, a damaged chunk can leave the line wrong but never complete (no
-        // part of a command is a command), so a stray CR cannot run it.
-        const std::size_t rest = line.size() - buf_.size();
-        const std::size_t n = !state_changing ? rest : rest > 1 ? std::min(rest - 1, kChunk) : 1;
-        send = line.substr(buf_.size(), n);
-        expected = send;
-        timeout = opt_.echo_timeout_s;
-        if (buf_.size() + n == line.size()) armed = true;
-        counters_.typed += static_cast<long>(n);
-      } else if (buf_.size() - CommonPrefix(buf_, line) <= kChunk) {
-        const std::size_t n = buf_.size() - CommonPrefix(buf_, line);
-        send = std::string(n, val2::kDel);  // wrong characters at the end
-        for (std::size_t k = 0; k < n; ++k) expected += val2::kRuboutEcho;
-        counters_.rubouts += static_cast<long>(n);
-      } else {
-        send = val2::kCtrlU;  // start the line again
-        expected = val2::CancelEcho();
-        ++counters_.cancels;
-      }
+      k->send = val2::kCr;
+      k->expected = std::string("\r\n") + val2::kPrompt;
     }
-    suspect = probe_again ? suspect + 1 : 0;
-
-    Reaction r;
-    std::optional<std::string> ran;
-    const std::string before = buf_;
-    if (armed && !armed_before) {
-      cancel_trace = execution_trace = message_trace = false;  // armed just now
-    }
-    const Status s = Step(send, expected, timeout, call, &r, &ran);
-    // Late bytes of an earlier exchange read as an execution (see UnexplainedOutput).
-    const bool foreign = s == Status::kOk && r.kind == Reaction::Kind::kExecuted && armed &&
-                         state_changing && UnexplainedOutput(send, r);
-    // The second look at a line found gone only asks whether it is still there: a damaged
-    // answer to it ("^R" CR LF "." one byte off is a cancel's echo) is no trace of a cancel.
-    if (armed && !gone_once && !foreign) {
-      cancel_trace |= saw_cancel_;
-      execution_trace |= saw_execution_;
-      message_trace |= saw_message_;
-    }
-    if (s != Status::kOk) {
-      if (state_changing && armed) pending_ = line;
-      return s;
-    }
-    if (r.kind == Reaction::Kind::kRetype) {
-      verified = r.text == line;
-    } else if (!known_ || buf_ != before) {
-      verified = false;
-    }
-    // A cancel the driver did not send (it sends ^U only unarmed): line noise made one, or an
-    // answer damaged in one byte reads as one (the retype of an empty line, "^R" CR LF ".", and a
-    // cancel's echo, "^U" CR LF ".", differ in one byte). When the command may have run before,
-    // the cancel does not say whether it did: for a move from rest WHERE tells (the line is gone,
-    // below); otherwise it is taken as not run.
-    if (r.kind == Reaction::Kind::kCancel && !(armed && check_motion) && !gone_once) armed = false;
-    if (r.kind != Reaction::Kind::kExecuted) continue;
-    if (armed && gone_once) {
-      // The second look at a line found gone ran what was left there (a ^R damaged into CR: an
-      // empty line, or stray characters): it says nothing of the command, and the line is still
-      // gone. Decided as the line found gone twice. (Bug fix, creeping-rest seed 165: taken as
-      // an empty line run with nothing armed, the move that had run was typed again.)
-      if (opt_.trace) opt_.trace("the second look ran what was left: still gone");
-      continue;
-    }
-    if (foreign) {
-      // Not this byte's answer: late bytes of an earlier exchange (a call that gave up during a
-      // WHERE), no trace of anything. The line is unknown, the command perhaps run. (Bug fix,
-      // creeping-rest seed 100: a retry's first ^R read the report of the failed call's last
-      // WHERE as a damaged line run; the move, which had run, was typed again.)
-      if (opt_.trace) opt_.trace("an answer with output of no line run: late bytes");
-      if (ran) guesses_ = {*ran, ""};
-      known_ = false;
-      continue;
-    }
-    if (armed && check_motion && !ran && r.text.empty()) {
-      // A line ran silently while the driver did not know what the controller held (a ^R
-      // damaged into a CR, after a lost answer): the command, or an empty line left by its run
-      // or by a cancel. The line is gone now: for a move from rest WHERE tells (below). (Bug fix,
-      // creeping-rest seed 144 at 0.035 deg/s: taken as the command's run, a move cancelled by a
-      // CR damaged into ^U was lost.)
-      if (opt_.trace) opt_.trace("a line not known ran silently: gone, the arm tells");
-      continue;
-    }
-
-    // A line ran. Only the command itself (no part of it is a command; a damaged one is not a
-    // command) or an empty line runs without a message: a success from a line that was not
-    // empty (as far as the driver knew, or, not knowing, with the command complete) is the
-    // command's.
-    const bool was_line = ran ? !RTrim(*ran).empty() : armed;
-    armed = false;
-    verified = false;
-    const std::string error = FirstError(r.text);
-    if (!error.empty()) last_error_ = error;
-    if (!state_changing) {
-      if (!r.text.empty() && error.empty()) {
-        outcome->executed = true;  // the caller parses it: anything else is asked again
-        outcome->output = r.text;
-        return Status::kOk;
-      }
-      if (!error.empty() && ++errors >= opt_.max_errors) return Status::kBadReply;
-      continue;  // a partial or garbled WHERE ran: it changes nothing, type it again
-    }
-    if (r.text.empty()) {
-      if (was_line) {
-        outcome->executed = true;
-        return Status::kOk;
-      }
-      continue;  // an empty line
-    }
-    // A message: the line changed nothing (the commands print nothing when they succeed). A
-    // refusal (as opposed to "not understood") can only be the command's: it is the only valid
-    // line. Any other message, or a damaged one, is taken as a damaged line and typed again.
-    if (val2::IsRefusal(error)) {
-      outcome->error = error;
-      return Status::kRejected;  // refused by the controller (out of range, ...)
-    }
-    if (++errors >= opt_.max_errors) {
-      if (error.empty()) last_error_ = "unreadable answer: " + r.text;
-      return Status::kBadReply;
-    }
-    // A partial or garbled line ran and was refused: type the command again.
+  } else if (RTrim(buf_) == line) {
+    k->send = val2::kDel;  // the command and a blank (which VAL would ignore): rub it out
+    k->expected = std::string(val2::kRuboutEcho);
+    ++counters_.rubouts;
+  } else if (d->armed && d->suspect < 2) {
+    k->send = val2::kCtrlR;  // not the command, if this retype is right: look again
+    k->expected = val2::RetypeEcho(line);
+    k->probe_again = true;
+    ++counters_.probes;
+  } else {
+    // The controller holds something else than the command (seen more than once): it cannot
+    // run as the command. Type on, rub out, or start again.
+    d->armed = false;
+    TypeTowards(d, k);
   }
+  return Turn::kSend;
+}
+
+Val2Arm::Turn Val2Arm::GoneLine(DriveState* d, bool gone_again, Keys* k, Status* s) {
+  if (d->cancel_trace && !d->execution_trace && !d->check_motion) {
+    d->armed = false;  // gone, and the answers show a cancel and no execution: it did not run
+    return Turn::kAgain;
+  }
+  if (d->message_trace && !d->check_motion) {
+    // Gone, and an answer too damaged to classify held a message: the line that ran printed
+    // it, so it was not the command (which runs silently; a CR damaged into a character had
+    // left it with a character more) or the command refused. It did not take effect: typed
+    // again. (Taken as the command's silent run, the command was reported done and lost.)
+    d->armed = false;
+    return Turn::kAgain;
+  }
+  if (d->state_changing && !d->execution_trace && !gone_again) {
+    // Gone with no trace of a run: the line ran with its answer lost, or a retype's answer
+    // was cut short by a dropout after its prompt ("^R" CR LF "." is also the retype of an
+    // empty line). Ask once more before taking it as run. (Bug fix, found by a simulated
+    // line's seed: the ^R that checks a typed command before its CR came back cut short; the
+    // driver took the command as run, reported it done, and cancelled it on the next call.)
+    d->gone_once = true;
+    k->send = val2::kCtrlR;
+    k->expected = val2::RetypeEcho("");
+    ++counters_.probes;
+    return Turn::kSend;
+  }
+  // The line has left the controller's input (seen twice, or with a trace of a run): it
+  // ran, and its answer was lost. (A line that never ran is still there, give or take a
+  // corrupted byte or two.)
+  if (!d->state_changing) {
+    d->armed = false;  // WHERE: just ask again
+    return Turn::kAgain;
+  }
+  if (d->check_motion) {
+    // The whole answer lost: a silent run, a refusal's message or a cancel's echo look
+    // the same, and so do the traces of damaged answers. The arm rested and the move is
+    // visible: WHERE tells, whatever the traces.
+    bool moved = false;
+    const Status ms = MovedFromRest(clock_->Now(), *d->check_motion, d->call, &moved);
+    if (ms != Status::kOk) {
+      pending_ = d->line;  // a retry resumes it, and checks again
+      *s = ms;
+      return Turn::kDone;
+    }
+    ++counters_.motion_checks;
+    if (!moved) {
+      ++counters_.unrun_found;
+      if (opt_.trace) opt_.trace("gone, but the arm still rests: not run, typed again");
+      d->armed = false;
+      return Turn::kAgain;
+    }
+  }
+  d->outcome->executed = true;
+  d->outcome->output_known = false;
+  *s = Status::kOk;
+  return Turn::kDone;
+}
+
+void Val2Arm::TypeTowards(DriveState* d, Keys* k) {
+  const std::string& line = d->line;
+  if (StartsWith(line, buf_)) {
+    // A command's last character goes alone, once the rest is known to be right: with the
+    // rest typed in chunks, a damaged chunk can leave the line wrong but never complete (no
+    // part of a command is a command), so a stray CR cannot run it.
+    const std::size_t rest = line.size() - buf_.size();
+    const std::size_t n = !d->state_changing ? rest : rest > 1 ? std::min(rest - 1, kChunk) : 1;
+    k->send = line.substr(buf_.size(), n);
+    k->expected = k->send;
+    k->timeout_s = opt_.echo_timeout_s;
+    if (buf_.size() + n == line.size()) d->armed = true;
+    counters_.typed += static_cast<long>(n);
+  } else if (buf_.size() - CommonPrefix(buf_, line) <= kChunk) {
+    const std::size_t n = buf_.size() - CommonPrefix(buf_, line);
+    k->send = std::string(n, val2::kDel);  // wrong characters at the end
+    for (std::size_t j = 0; j < n; ++j) k->expected += val2::kRuboutEcho;
+    counters_.rubouts += static_cast<long>(n);
+  } else {
+    k->send = val2::kCtrlU;  // start the line again
+    k->expected = val2::CancelEcho();
+    ++counters_.cancels;
+  }
+}
+
+Val2Arm::Turn Val2Arm::TakeAnswer(DriveState* d, const Keys& k, Status* s) {
+  Reaction r;
+  std::optional<std::string> ran;
+  const std::string before = buf_;
+  if (d->armed && !k.armed_before) {
+    d->cancel_trace = d->execution_trace = d->message_trace = false;  // armed just now
+  }
+  const Status st = Step(k.send, k.expected, k.timeout_s, d->call, &r, &ran);
+  // Late bytes of an earlier exchange read as an execution (see UnexplainedOutput).
+  const bool foreign = st == Status::kOk && r.kind == Reaction::Kind::kExecuted && d->armed &&
+                       d->state_changing && UnexplainedOutput(k.send, r);
+  // The second look at a line found gone only asks whether it is still there: a damaged
+  // answer to it ("^R" CR LF "." one byte off is a cancel's echo) is no trace of a cancel.
+  if (d->armed && !d->gone_once && !foreign) {
+    d->cancel_trace |= saw_cancel_;
+    d->execution_trace |= saw_execution_;
+    d->message_trace |= saw_message_;
+  }
+  if (st != Status::kOk) {
+    if (d->state_changing && d->armed) pending_ = d->line;
+    *s = st;
+    return Turn::kDone;
+  }
+  if (r.kind == Reaction::Kind::kRetype) {
+    d->verified = r.text == d->line;
+  } else if (!known_ || buf_ != before) {
+    d->verified = false;
+  }
+  // A cancel the driver did not send (it sends ^U only unarmed): line noise made one, or an
+  // answer damaged in one byte reads as one (the retype of an empty line, "^R" CR LF ".", and a
+  // cancel's echo, "^U" CR LF ".", differ in one byte). When the command may have run before,
+  // the cancel does not say whether it did: for a move from rest WHERE tells (the line is gone,
+  // below); otherwise it is taken as not run.
+  if (r.kind == Reaction::Kind::kCancel && !(d->armed && d->check_motion) && !d->gone_once) {
+    d->armed = false;
+  }
+  if (r.kind != Reaction::Kind::kExecuted) return Turn::kAgain;
+  if (d->armed && d->gone_once) {
+    // The second look at a line found gone ran what was left there (a ^R damaged into CR: an
+    // empty line, or stray characters): it says nothing of the command, and the line is still
+    // gone. Decided as the line found gone twice. (Bug fix, creeping-rest seed 165: taken as
+    // an empty line run with nothing armed, the move that had run was typed again.)
+    if (opt_.trace) opt_.trace("the second look ran what was left: still gone");
+    return Turn::kAgain;
+  }
+  if (foreign) {
+    // Not this byte's answer: late bytes of an earlier exchange (a call that gave up during a
+    // WHERE), no trace of anything. The line is unknown, the command perhaps run. (Bug fix,
+    // creeping-rest seed 100: a retry's first ^R read the report of the failed call's last
+    // WHERE as a damaged line run; the move, which had run, was typed again.)
+    if (opt_.trace) opt_.trace("an answer with output of no line run: late bytes");
+    if (ran) guesses_ = {*ran, ""};
+    known_ = false;
+    return Turn::kAgain;
+  }
+  if (d->armed && d->check_motion && !ran && r.text.empty()) {
+    // A line ran silently while the driver did not know what the controller held (a ^R
+    // damaged into a CR, after a lost answer): the command, or an empty line left by its run
+    // or by a cancel. The line is gone now: for a move from rest WHERE tells (below). (Bug fix,
+    // creeping-rest seed 144 at 0.035 deg/s: taken as the command's run, a move cancelled by a
+    // CR damaged into ^U was lost.)
+    if (opt_.trace) opt_.trace("a line not known ran silently: gone, the arm tells");
+    return Turn::kAgain;
+  }
+  return LineRan(d, r, ran, s);
+}
+
+Val2Arm::Turn Val2Arm::LineRan(DriveState* d, const Reaction& r,
+                               const std::optional<std::string>& ran, Status* s) {
+  // A line ran. Only the command itself (no part of it is a command; a damaged one is not a
+  // command) or an empty line runs without a message: a success from a line that was not
+  // empty (as far as the driver knew, or, not knowing, with the command complete) is the
+  // command's.
+  const bool was_line = ran ? !RTrim(*ran).empty() : d->armed;
+  d->armed = false;
+  d->verified = false;
+  const std::string error = FirstError(r.text);
+  if (!error.empty()) last_error_ = error;
+  if (!d->state_changing) {
+    if (!r.text.empty() && error.empty()) {
+      d->outcome->executed = true;  // the caller parses it: anything else is asked again
+      d->outcome->output = r.text;
+      *s = Status::kOk;
+      return Turn::kDone;
+    }
+    if (!error.empty() && ++d->errors >= opt_.max_errors) {
+      *s = Status::kBadReply;
+      return Turn::kDone;
+    }
+    return Turn::kAgain;  // a partial or garbled WHERE ran: it changes nothing, type it again
+  }
+  if (r.text.empty()) {
+    if (!was_line) return Turn::kAgain;  // an empty line
+    d->outcome->executed = true;
+    *s = Status::kOk;
+    return Turn::kDone;
+  }
+  // A message: the line changed nothing (the commands print nothing when they succeed). A
+  // refusal (as opposed to "not understood") can only be the command's: it is the only valid
+  // line. Any other message, or a damaged one, is taken as a damaged line and typed again.
+  if (val2::IsRefusal(error)) {
+    d->outcome->error = error;
+    *s = Status::kRejected;  // refused by the controller (out of range, ...)
+    return Turn::kDone;
+  }
+  if (++d->errors >= opt_.max_errors) {
+    if (error.empty()) last_error_ = "unreadable answer: " + r.text;
+    *s = Status::kBadReply;
+    return Turn::kDone;
+  }
+  return Turn::kAgain;  // a partial or garbled line ran and was refused: type it again
 }
 
 bool Val2Arm::PastTheMove(const Motion& motion, double progress) const {

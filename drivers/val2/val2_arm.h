@@ -240,6 +240,41 @@ class Val2Arm final : public device::Arm {
   /// run.
   device::Status Drive(const std::string& line, bool state_changing, bool resume, CallClock* call,
                        LineOutcome* outcome, const Motion* check_motion = nullptr);
+  /// One Drive's state: the line, and what the answers since it was armed show of it.
+  struct DriveState {
+    const std::string& line;
+    bool state_changing;
+    const Motion* check_motion;
+    CallClock* call;
+    LineOutcome* outcome;
+    bool armed;             ///< the whole line may be in the controller's input, or have run
+    bool verified = false;  ///< a ^R answer showed exactly the line
+    /// While armed: traces of a cancel, of an execution and of a message, in answers since.
+    bool cancel_trace = false, execution_trace = false, message_trace = false;
+    int suspect = 0;         ///< ^R answers near the line but not it, in a row
+    int errors = 0;          ///< lines that ran with "not understood"
+    bool gone_once = false;  ///< the line was found gone at the last turn, with no trace of a run
+  };
+  /// What one turn of a Drive sends, and what it expects back.
+  struct Keys {
+    double timeout_s = 0.0;  ///< for the whole answer
+    std::string send, expected;
+    bool probe_again = false;   ///< a second look at a line near the command
+    bool armed_before = false;  ///< DriveState::armed before this turn
+  };
+  /// One turn's decision: send Keys, decide again without sending, or end the Drive.
+  enum class Turn { kSend, kAgain, kDone };
+  /// What to send next from what the controller is believed to hold; *s when kDone.
+  Turn NextKeys(DriveState* d, Keys* k, device::Status* s);
+  /// The armed line has left the controller's input: decides whether it ran.
+  Turn GoneLine(DriveState* d, bool gone_again, Keys* k, device::Status* s);
+  /// The controller holds something other than the line: type on, rub out, or start again.
+  void TypeTowards(DriveState* d, Keys* k);
+  /// Sends `k` and reads the answer into the Drive's state; *s when kDone.
+  Turn TakeAnswer(DriveState* d, const Keys& k, device::Status* s);
+  /// A line ran with answer `r`: the command's success, its refusal, or a damaged line.
+  Turn LineRan(DriveState* d, const val2::Reaction& r, const std::optional<std::string>& ran,
+               device::Status* s);
   /// Empties the controller's line without executing `pending` if it is still there. Sets
   /// *executed when `pending` turns out to have been executed.
   device::Status Dispose(const std::string& pending, CallClock* call, bool* executed);
