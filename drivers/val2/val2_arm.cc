@@ -889,23 +889,8 @@ Status Val2Arm::Step(const std::string& bytes, const std::string& expected, doub
     known_ = false;
     return s;
   }
-  // The answers that are complete as they stand: the expected one; a ^R's answer (the
-  // expected retype or, asking what an unknown line holds, that of each likely line) once the
-  // line is quiet.
-  Expect want;
-  if (!expected.empty()) want.exact.push_back(expected);
-  if (bytes.size() == 1 && bytes[0] == val2::kCtrlR) {
-    if (!was_known) {
-      for (const std::string& g : guesses_) want.exact.push_back(val2::RetypeEcho(g));
-    }
-    want.retype = true;
-  }
-  // The echo of a chunk is taken at its length: a chunk cannot complete, run or cancel the
-  // command, so a longer echo (a character damaged into a control character) only leaves bytes
-  // that spoil the next answer, which is then asked again.
-  if (bytes.size() > 1 && IsPrintable(bytes[0])) want.min_length = bytes.size();
   std::string answer;
-  s = ReadAnswer(want, timeout_s, call, &answer);
+  s = ReadAnswer(WantedAnswer(bytes, expected, was_known), timeout_s, call, &answer);
   if (s != Status::kOk) {
     known_ = false;
     return s;
@@ -914,17 +899,7 @@ Status Val2Arm::Step(const std::string& bytes, const std::string& expected, doub
     opt_.trace("sent " + Visible(bytes) + " got " + Visible(answer) + " (line " +
                (was_known ? Visible(before) : std::string("unknown")) + ")");
   }
-  // Traces of a cancel or an execution anywhere in the answer, for answers too damaged to
-  // classify (a byte inserted into the line, say): the echo of ^U, or a CR LF that is not the
-  // tail of a "^U" or "^R" echo.
-  saw_cancel_ = answer.find("^U\r\n") != std::string::npos;
-  saw_message_ = !FirstError(answer).empty();
-  saw_execution_ = false;
-  const bool retype_asked = bytes.size() == 1 && bytes[0] == val2::kCtrlR;
-  for (std::size_t i = answer.find("\r\n"); i != std::string::npos;
-       i = answer.find("\r\n", i + 1)) {
-    if (!RetypeOrCancelBreak(answer, i, retype_asked)) saw_execution_ = true;
-  }
+  NoteTraces(bytes, answer);
   const bool typing = IsPrintable(bytes[0]);
   if (answer == expected && (typing || bytes.size() > 1 || bytes[0] == val2::kDel)) {
     // The exact echo of characters typed or rubbed out.
@@ -957,14 +932,54 @@ Status Val2Arm::Step(const std::string& bytes, const std::string& expected, doub
     known_ = false;
     return Status::kOk;
   }
-  switch (reaction->kind) {
+  Believe(*reaction, typing ? before + bytes : before, was_known, before, executed_line);
+  return Status::kOk;
+}
+
+Val2Arm::Expect Val2Arm::WantedAnswer(const std::string& bytes, const std::string& expected,
+                                      bool was_known) const {
+  // The answers that are complete as they stand: the expected one; a ^R's answer (the
+  // expected retype or, asking what an unknown line holds, that of each likely line) once the
+  // line is quiet.
+  Expect want;
+  if (!expected.empty()) want.exact.push_back(expected);
+  if (bytes.size() == 1 && bytes[0] == val2::kCtrlR) {
+    if (!was_known) {
+      for (const std::string& g : guesses_) want.exact.push_back(val2::RetypeEcho(g));
+    }
+    want.retype = true;
+  }
+  // The echo of a chunk is taken at its length: a chunk cannot complete, run or cancel the
+  // command, so a longer echo (a character damaged into a control character) only leaves bytes
+  // that spoil the next answer, which is then asked again.
+  if (bytes.size() > 1 && IsPrintable(bytes[0])) want.min_length = bytes.size();
+  return want;
+}
+
+void Val2Arm::NoteTraces(const std::string& bytes, const std::string& answer) {
+  // Traces of a cancel or an execution anywhere in the answer, for answers too damaged to
+  // classify (a byte inserted into the line, say): the echo of ^U, or a CR LF that is not the
+  // tail of a "^U" or "^R" echo.
+  saw_cancel_ = answer.find("^U\r\n") != std::string::npos;
+  saw_message_ = !FirstError(answer).empty();
+  saw_execution_ = false;
+  const bool retype_asked = bytes.size() == 1 && bytes[0] == val2::kCtrlR;
+  for (std::size_t i = answer.find("\r\n"); i != std::string::npos;
+       i = answer.find("\r\n", i + 1)) {
+    if (!RetypeOrCancelBreak(answer, i, retype_asked)) saw_execution_ = true;
+  }
+}
+
+void Val2Arm::Believe(const Reaction& reaction, const std::string& typed, bool was_known,
+                      const std::string& before, std::optional<std::string>* executed_line) {
+  switch (reaction.kind) {
     case Reaction::Kind::kNothing:
     case Reaction::Kind::kGarbled:
-      if (known_) guesses_ = {before, typing ? before + bytes : before, ""};
+      if (known_) guesses_ = {before, typed, ""};
       known_ = false;
       break;
     case Reaction::Kind::kAppended:
-      buf_ += reaction->text;  // it arrived as a printable character
+      buf_ += reaction.text;  // it arrived as a printable character
       break;
     case Reaction::Kind::kRubout:
       if (!buf_.empty()) {
@@ -981,14 +996,14 @@ Status Val2Arm::Step(const std::string& bytes, const std::string& expected, doub
       break;
     case Reaction::Kind::kRetype:
       if (!was_known &&
-          std::find(guesses_.begin(), guesses_.end(), reaction->text) == guesses_.end() &&
-          reaction->text != tentative_view_) {
+          std::find(guesses_.begin(), guesses_.end(), reaction.text) == guesses_.end() &&
+          reaction.text != tentative_view_) {
         // An unexpected line, perhaps a damaged retype: believed once seen twice.
-        tentative_view_ = reaction->text;
+        tentative_view_ = reaction.text;
         break;
       }
       known_ = true;
-      buf_ = reaction->text;
+      buf_ = reaction.text;
       tentative_view_.clear();
       break;
     case Reaction::Kind::kExecuted:
@@ -997,7 +1012,6 @@ Status Val2Arm::Step(const std::string& bytes, const std::string& expected, doub
       buf_.clear();
       break;
   }
-  return Status::kOk;
 }
 
 Status Val2Arm::ReadAnswer(const Expect& want, double first_byte_timeout_s, CallClock* call,

@@ -281,19 +281,28 @@ class Val2Arm final : public device::Arm {
   /// After a lost link: cancel what is pending, ABORT, require a Read.
   device::Status Recover(CallClock* call);
 
+  /// When an answer is complete (ReadAnswer).
+  struct Expect {
+    std::vector<std::string> exact;  ///< answers complete as they stand
+    std::size_t min_length = 0;      ///< > 0: complete at this length (a typed chunk's echo)
+    bool retype = false;             ///< a ^R: complete only when the line goes quiet
+  };
   /// Sends characters to type (or rub out), or one control character, and reads the
   /// controller's whole answer; updates the believed line (known_, buf_). On an execution
   /// reports the line that was executed (if known).
   device::Status Step(const std::string& bytes, const std::string& expected, double timeout_s,
                       CallClock* call, val2::Reaction* reaction,
                       std::optional<std::string>* executed_line);
+  /// The answers to `bytes` that are complete as they stand (ReadAnswer stops at one).
+  Expect WantedAnswer(const std::string& bytes, const std::string& expected, bool was_known) const;
+  /// saw_cancel_, saw_message_ and saw_execution_ from the whole answer to `bytes`.
+  void NoteTraces(const std::string& bytes, const std::string& answer);
+  /// What one key's answer, classified as `reaction`, leaves in the controller's line (`typed`:
+  /// the line before with the key typed into it, if it was a printable one).
+  void Believe(const val2::Reaction& reaction, const std::string& typed, bool was_known,
+               const std::string& before, std::optional<std::string>* executed_line);
   /// Reads until the answer is complete as `want` says, or is an execution with its prompt, or
   /// the line goes quiet.
-  struct Expect {
-    std::vector<std::string> exact;  ///< answers complete as they stand
-    std::size_t min_length = 0;      ///< > 0: complete at this length (a typed chunk's echo)
-    bool retype = false;             ///< a ^R: complete only when the line goes quiet
-  };
   device::Status ReadAnswer(const Expect& want, double first_byte_timeout_s, CallClock* call,
                             std::string* answer);
   /// Throws away bytes nobody asked for (late answers).
