@@ -186,6 +186,118 @@ std::optional<Vector3d> TopOutlineAxis(const std::vector<Vector3d>& top_points,
   return (std::cos(theta) * e1 + std::sin(theta) * e2).normalized();
 }
 
+/// The faces a box is fitted to: A1, the largest near-horizontal region (the top); A2, the
+/// largest near-vertical one; A3, the largest other near-vertical one nearly perpendicular to A2.
+struct Faces {
+  const segment::PlaneRegion* top = nullptr;
+  const segment::PlaneRegion* side2 = nullptr;
+  const segment::PlaneRegion* side3 = nullptr;
+};
+
+/// A1 and A2 of `regions` (side2 null when none is large enough); nullopt without a large top.
+std::optional<Faces> TopAndSide(const std::vector<const segment::PlaneRegion*>& regions,
+                                const BoxFitConfig& config, double cos_tol, double sin_tol) {
+  Faces f;
+  for (const segment::PlaneRegion* r : regions) {
+    if (std::abs(r->normal_W.z()) > cos_tol) {
+      if (f.top == nullptr || r->cells > f.top->cells) f.top = r;
+    } else if (std::abs(r->normal_W.z()) < sin_tol) {
+      if (f.side2 == nullptr || r->cells > f.side2->cells) f.side2 = r;
+    }
+  }
+  if (f.top == nullptr || f.top->cells < config.min_face_cells) return std::nullopt;
+  if (f.side2 != nullptr && f.side2->cells < config.min_face_cells) f.side2 = nullptr;
+  return f;
+}
+
+/// A3: the largest near-vertical region other than A1 and A2, nearly perpendicular to n2.
+const segment::PlaneRegion* ThirdSide(const std::vector<const segment::PlaneRegion*>& regions,
+                                      const Faces& f, const Vector3d& n2,
+                                      const BoxFitConfig& config, double sin_tol) {
+  const segment::PlaneRegion* side3 = nullptr;
+  if (f.side2 == nullptr) return side3;
+  for (const segment::PlaneRegion* r : regions) {
+    if (r == f.top || r == f.side2 || std::abs(r->normal_W.z()) >= sin_tol) continue;
+    if (r->cells < config.min_face_cells) continue;
+    if (std::abs(r->normal_W.normalized().dot(n2)) >= sin_tol) continue;
+    if (side3 == nullptr || r->cells > side3->cells) side3 = r;
+  }
+  return side3;
+}
+
+/// The top's edge points on its plane: where the top's far edge occludes the table, a stripe
+/// cut by the edge gives points off the plane and, along it, beyond the edge.
+std::vector<Vector3d> TopEdges(const segment::SegmentResult& s, const scan::RangeImage& range,
+                               const segment::PlaneRegion& top) {
+  std::vector<Vector3d> edges;
+  AppendEdgePoints(s, range, top.id, &edges);
+  const double off_plane = std::max(kMaxEdgeOffPlaneM, 3.0 * std::sqrt(top.residual_m2));
+  std::erase_if(edges, [&](const Vector3d& p) {
+    return std::abs(top.normal_W.dot(p - top.centroid_W)) > off_plane;
+  });
+  return edges;
+}
+
+/// n2: A2's normal made perpendicular to n1 or, with no side seen, along the top's outline.
+std::optional<Vector3d> SecondNormal(const segment::SegmentResult& s, const scan::RangeImage& range,
+                                     const Faces& f, const std::vector<Vector3d>& edges_top,
+                                     const Vector3d& n1, const BoxFitConfig& config) {
+  if (f.side2 != nullptr) {
+    Vector3d n2 = f.side2->normal_W - f.side2->normal_W.dot(n1) * n1;
+    if (n2.norm() < 1e-6) return std::nullopt;
+    return n2.normalized();
+  }
+  if (f.top->cells < config.min_top_only_cells) return std::nullopt;
+  std::vector<Vector3d> top_points;
+  for (int i = 0; i < s.rows * s.cols; ++i) {
+    if (s.labels[i] == f.top->id) top_points.push_back(range.at(i / s.cols, i % s.cols).p_W);
+  }
+  return TopOutlineAxis(top_points, edges_top, n1, config.min_top_fill);
+}
+
+/// The box's extent along n (n2 or n3): from the visible side `side` to the hidden face voted
+/// over `edges` beyond it (the box's interior is on the top's side of it) or, with no side
+/// seen, both ends at the edge points' extremes. `spacing`: the top's cell spacing along n.
+std::optional<std::pair<double, double>> ExtentAlong(const std::vector<Vector3d>& edges,
+                                                     const segment::PlaneRegion* side,
+                                                     const segment::PlaneRegion& top,
+                                                     const Vector3d& n, double spacing) {
+  if (side == nullptr) return BothExtremes(edges, n, spacing);
+  const double a = n.dot(side->centroid_W);
+  const double into = n.dot(top.centroid_W - side->centroid_W) >= 0 ? 1.0 : -1.0;
+  return HiddenExtent(edges, n, a, into, spacing);
+}
+
+/// The box between the extents along n2 and n3 and from the table (z = 0 below the top's
+/// centroid) to the top, with the faces' regions and cells; nullopt for an edge out of range.
+std::optional<BoxModel> Assemble(const Faces& f, const Vector3d& n1, const Vector3d& n2,
+                                 const Vector3d& n3, const std::pair<double, double>& ext2,
+                                 const std::pair<double, double>& ext3) {
+  const double hi1 = n1.dot(f.top->centroid_W);
+  const double lo1 = hi1 - f.top->centroid_W.z() * n1.z();
+  const Vector3d size(ext2.second - ext2.first, ext3.second - ext3.first, hi1 - lo1);
+  for (int i = 0; i < 3; ++i) {
+    if (!(size[i] >= kMinEdgeM && size[i] <= kMaxEdgeM)) return std::nullopt;
+  }
+  Pose3 X_WO = Pose3::Identity();
+  Eigen::Matrix3d R_WO;
+  R_WO.col(0) = n2;
+  R_WO.col(1) = n3;
+  R_WO.col(2) = n1;
+  X_WO.linear() = R_WO;
+  X_WO.translation() = 0.5 * (ext2.first + ext2.second) * n2 +
+                       0.5 * (ext3.first + ext3.second) * n3 + 0.5 * (lo1 + hi1) * n1;
+  BoxModel box = MakeBox(X_WO, size);
+  box.regions.push_back(f.top->id);
+  box.points = f.top->cells;
+  for (const segment::PlaneRegion* side : {f.side2, f.side3}) {
+    if (side == nullptr) continue;
+    box.regions.push_back(side->id);
+    box.points += side->cells;
+  }
+  return box;
+}
+
 }  // namespace
 
 std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
@@ -195,7 +307,6 @@ std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
   HGRASP_DEMAND(static_cast<int>(s.labels.size()) == s.rows * s.cols);
   std::unordered_map<int, const segment::PlaneRegion*> by_id;
   for (const segment::PlaneRegion& r : s.regions) by_id[r.id] = &r;
-
   const double cos_tol = std::cos(DegToRad(config.max_face_angle_deg));
   const double sin_tol = std::sin(DegToRad(config.max_face_angle_deg));
   std::vector<const segment::PlaneRegion*> regions;
@@ -203,122 +314,35 @@ std::optional<BoxModel> FitBox(const segment::SegmentResult& s,
     auto it = by_id.find(id);
     if (it != by_id.end()) regions.push_back(it->second);
   }
+  std::optional<Faces> faces = TopAndSide(regions, config, cos_tol, sin_tol);
+  if (!faces) return std::nullopt;
+  const segment::PlaneRegion& top = *faces->top;
+  const std::vector<Vector3d> edges_top = TopEdges(s, range, top);
 
-  // A1: the largest near-horizontal region; A2: the largest near-vertical one.
-  const segment::PlaneRegion* top = nullptr;
-  const segment::PlaneRegion* side2 = nullptr;
-  for (const segment::PlaneRegion* r : regions) {
-    if (std::abs(r->normal_W.z()) > cos_tol) {
-      if (top == nullptr || r->cells > top->cells) top = r;
-    } else if (std::abs(r->normal_W.z()) < sin_tol) {
-      if (side2 == nullptr || r->cells > side2->cells) side2 = r;
-    }
-  }
-  if (top == nullptr || top->cells < config.min_face_cells) return std::nullopt;
-  if (side2 != nullptr && side2->cells < config.min_face_cells) side2 = nullptr;
-
-  std::vector<Vector3d> edges_top, edges2, edges3;
-  AppendEdgePoints(s, range, top->id, &edges_top);
-  // Only edge points on the top's plane: where the top's far edge occludes the table, a stripe
-  // cut by the edge gives points off the plane and, along it, beyond the edge.
-  const double off_plane = std::max(kMaxEdgeOffPlaneM, 3.0 * std::sqrt(top->residual_m2));
-  std::erase_if(edges_top, [&](const Vector3d& p) {
-    return std::abs(top->normal_W.dot(p - top->centroid_W)) > off_plane;
-  });
-
-  // Orthonormal normals: n1 up from the top fit, n2 from A2 made perpendicular (or, with no side
-  // seen, along the top's outline), n3 = n1 x n2.
-  Vector3d n1 = top->normal_W.normalized();
+  // Orthonormal normals: n1 up from the top fit, n2 from A2 (SecondNormal), n3 = n1 x n2.
+  Vector3d n1 = top.normal_W.normalized();
   if (n1.z() < 0) n1 = -n1;
-  Vector3d n2;
-  if (side2 != nullptr) {
-    n2 = side2->normal_W - side2->normal_W.dot(n1) * n1;
-    if (n2.norm() < 1e-6) return std::nullopt;
-    n2.normalize();
-  } else {
-    if (top->cells < config.min_top_only_cells) return std::nullopt;
-    std::vector<Vector3d> top_points;
-    for (int i = 0; i < s.rows * s.cols; ++i) {
-      if (s.labels[i] == top->id) top_points.push_back(range.at(i / s.cols, i % s.cols).p_W);
-    }
-    const std::optional<Vector3d> axis =
-        TopOutlineAxis(top_points, edges_top, n1, config.min_top_fill);
-    if (!axis) return std::nullopt;
-    n2 = *axis;
-  }
-  const Vector3d n3 = n1.cross(n2);
+  const std::optional<Vector3d> n2 = SecondNormal(s, range, *faces, edges_top, n1, config);
+  if (!n2) return std::nullopt;
+  const Vector3d n3 = n1.cross(*n2);
+  faces->side3 = ThirdSide(regions, *faces, *n2, config, sin_tol);
+  std::vector<Vector3d> edges2, edges3;
+  if (faces->side2 != nullptr) AppendEdgePoints(s, range, faces->side2->id, &edges2);
+  if (faces->side3 != nullptr) AppendEdgePoints(s, range, faces->side3->id, &edges3);
 
-  // A3: the largest other near-vertical region nearly perpendicular to A2 (and so to A1).
-  const segment::PlaneRegion* side3 = nullptr;
-  for (const segment::PlaneRegion* r : regions) {
-    if (side2 == nullptr) break;
-    if (r == top || r == side2 || std::abs(r->normal_W.z()) >= sin_tol) continue;
-    if (r->cells < config.min_face_cells) continue;
-    if (std::abs(r->normal_W.normalized().dot(n2)) >= sin_tol) continue;
-    if (side3 == nullptr || r->cells > side3->cells) side3 = r;
-  }
-
-  if (side2 != nullptr) AppendEdgePoints(s, range, side2->id, &edges2);
-  if (side3 != nullptr) AppendEdgePoints(s, range, side3->id, &edges3);
-
-  // Pair 1: top at n1 . c_top, bottom on the table z = 0 below the top's centroid.
-  const double hi1 = n1.dot(top->centroid_W);
-  const double lo1 = hi1 - top->centroid_W.z() * n1.z();
-
-  // Pair 2: A2 visible; B2 voted over the edges of A1 and A3, beyond A2 away from the cameras
-  // (the box's interior is on the top's side of A2).
-  // The top's cell spacing along n2 and n3, for placing hidden faces (see Extreme).
-  const double spacing2 = Spacing(s, range, top->id, n2);
-  const double spacing3 = Spacing(s, range, top->id, n3);
-
-  // With no side seen, both ends are the top's edge points' extremes.
-  std::optional<std::pair<double, double>> ext2;
-  if (side2 != nullptr) {
-    const double a2 = n2.dot(side2->centroid_W);
-    const double into2 = n2.dot(top->centroid_W - side2->centroid_W) >= 0 ? 1.0 : -1.0;
-    ext2 = HiddenExtent(HorizontalEdges(edges_top, edges3), n2, a2, into2, spacing2);
-  } else {
-    ext2 = BothExtremes(edges_top, n2, spacing2);
-  }
+  // Pair 1 (Assemble): the top, and the table below it. Pair 2: A2 visible, B2 voted over the
+  // edges of A1 and A3. Pair 3: over the edges of A1 and A2. With no side seen, both ends are
+  // the top's edge points' extremes. The top's cell spacing along n2 and n3 places hidden faces
+  // (see Extreme).
+  const std::vector<Vector3d> edges_for_2 =
+      faces->side2 != nullptr ? HorizontalEdges(edges_top, edges3) : edges_top;
+  const std::optional<std::pair<double, double>> ext2 =
+      ExtentAlong(edges_for_2, faces->side2, top, *n2, Spacing(s, range, top.id, *n2));
   if (!ext2) return std::nullopt;
-
-  // Pair 3: over the edges of A1 and A2.
-  const std::vector<Vector3d> edges_for_3 = HorizontalEdges(edges_top, edges2);
-  std::optional<std::pair<double, double>> ext3;
-  if (side3 != nullptr) {
-    const double a3 = n3.dot(side3->centroid_W);
-    const double into3 = n3.dot(top->centroid_W - side3->centroid_W) >= 0 ? 1.0 : -1.0;
-    ext3 = HiddenExtent(edges_for_3, n3, a3, into3, spacing3);
-  } else {
-    ext3 = BothExtremes(edges_for_3, n3, spacing3);
-  }
+  const std::optional<std::pair<double, double>> ext3 = ExtentAlong(
+      HorizontalEdges(edges_top, edges2), faces->side3, top, n3, Spacing(s, range, top.id, n3));
   if (!ext3) return std::nullopt;
-
-  const Vector3d size(ext2->second - ext2->first, ext3->second - ext3->first, hi1 - lo1);
-  for (int i = 0; i < 3; ++i) {
-    if (!(size[i] >= kMinEdgeM && size[i] <= kMaxEdgeM)) return std::nullopt;
-  }
-
-  Pose3 X_WO = Pose3::Identity();
-  Eigen::Matrix3d R_WO;
-  R_WO.col(0) = n2;
-  R_WO.col(1) = n3;
-  R_WO.col(2) = n1;
-  X_WO.linear() = R_WO;
-  X_WO.translation() = 0.5 * (ext2->first + ext2->second) * n2 +
-                       0.5 * (ext3->first + ext3->second) * n3 + 0.5 * (lo1 + hi1) * n1;
-  BoxModel box = MakeBox(X_WO, size);
-  box.regions.push_back(top->id);
-  box.points = top->cells;
-  if (side2 != nullptr) {
-    box.regions.push_back(side2->id);
-    box.points += side2->cells;
-  }
-  if (side3 != nullptr) {
-    box.regions.push_back(side3->id);
-    box.points += side3->cells;
-  }
-  return box;
+  return Assemble(*faces, n1, *n2, n3, *ext2, *ext3);
 }
 
 std::vector<BoxModel> FitBoxes(const segment::SegmentResult& s, const segment::Grouping& g,
