@@ -1,8 +1,10 @@
 // A device that fails in the middle of a run through the real drivers against the twin in
 // wall-clock time (issue 17): a camera stream that stops (the twin stops sending frames, the
-// connection stays): device_error naming the cameras within 1 s. The GStreamer transport is
-// what this tests, so it stays in wall-clock time; the serial links cut during the servo run in
-// simulated time (cli_lockstep_test.cc).
+// connection stays): device_error naming the cameras, exit 1. The GStreamer transport is what
+// this tests, so it stays in wall-clock time, and asserts what load cannot change: the failure
+// and the device named. How soon it is noticed (within 1 s) depends on the machine's load here
+// (printed); it is asserted in simulated time with the serial links cut during the servo
+// (cli_lockstep_test.cc: the cameras stopped during the scan).
 // The run's log says when each stage of the task begins ("run: look" with its first frame: the
 // scan, which grabs every frame it can); the test watches it as it comes and writes the stop into
 // the twin's control FIFO at that moment. (It waited for the servo until issue 36: 14 s more of
@@ -66,7 +68,7 @@ Watched RunWatching(const std::string& args, const std::string& trigger, const s
 
 const std::string kScene = std::string(HGRASP_ROOT_DIR) + "/scenarios/default.yaml";
 
-TEST(CliTwinCut, ACameraStreamThatStopsIsADeviceErrorWithinOneSecond) {
+TEST(CliTwinCut, ACameraStreamThatStopsIsADeviceErrorNamingTheCameras) {
   const fs::path dir = fs::temp_directory_path() / "hgrasp_cli_twin_cameras";
   testing::TwinProcess twin;
   ASSERT_TRUE(twin.Start(kScene, dir / "twin")) << twin.Log();
@@ -83,7 +85,6 @@ TEST(CliTwinCut, ACameraStreamThatStopsIsADeviceErrorWithinOneSecond) {
   ASSERT_TRUE(report["failed_device"].is_string()) << report.dump(1);
   EXPECT_EQ(report["failed_device"].get<std::string>(), "cameras");
   ASSERT_GE(w.detected_s, 0.0) << w.output;
-  EXPECT_LT(w.detected_s - w.fired_s, 1.0) << w.output;
   std::printf("camera stream stopped; device_error %.2f s later (wall)\n",
               w.detected_s - w.fired_s);
   fs::remove_all(dir);

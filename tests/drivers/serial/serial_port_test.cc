@@ -55,8 +55,10 @@ TEST(SerialPort, ConfiguresRawFramingAndTimesOut) {
   const double waited =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(n, 0u);
+  // The whole timeout waited (load cannot shorten a wait); how much longer is the machine's
+  // load (label realtime): 10 timeouts is a hang guard, not a latency bound.
   EXPECT_GE(waited, 0.095);
-  EXPECT_LT(waited, 0.3);
+  EXPECT_LT(waited, 1.0);
 
   // Bytes both ways, binary-clean (no CR/LF translation, no flow-control characters eaten).
   const std::uint8_t out[] = {0x00, 0x0D, 0x0A, 0x11, 0x13, 0x03, 0xFF};
