@@ -143,29 +143,46 @@ MomentTimes CleanRunMoments(const std::string& scene, const fs::path& out) {
   return times;
 }
 
-// The cameras' streams stopped 1 s into the scan (at a twin time, --at): device_error naming the
-// cameras within 1 s of twin time (the grabber's frame timeout, 0.5 s, and the scan's pace) (the
-// wall-clock run of the same, through GStreamer, is cli_twin_cut_test.cc), exit 1, the same every
-// run.
-void CamerasStoppedDuringTheScan(const std::string& scene, const fs::path& dir, double look_t) {
-  char at[64];
-  std::snprintf(at, sizeof at, "%.3f:stop cameras", look_t + 1.0);
-  std::string logs[2];
+// A control command `what` at twin time `t_s` (--at) in two lockstep runs of `scene` (folders
+// NAME0 and NAME1 in `dir`): each exits 1 and the two command logs are the same; the second
+// run's report and twin record. Assertion failures are the caller's to stop on (HasFatalFailure).
+struct ControlledRun {
   json report, twin;
+};
+ControlledRun RunTwiceWithControl(const std::string& scene, const fs::path& dir,
+                                  const std::string& name, double t_s, const std::string& what) {
+  char at[96];
+  std::snprintf(at, sizeof at, "%.3f:%s", t_s, what.c_str());
+  std::string logs[2];
+  ControlledRun run;
   for (int i = 0; i < 2; ++i) {
-    const fs::path out = dir / ("cameras" + std::to_string(i));
-    const fs::path log = dir / ("camera_commands" + std::to_string(i) + ".json");
+    const fs::path out = dir / (name + std::to_string(i));
+    const fs::path log = dir / (name + "_commands" + std::to_string(i) + ".json");
     const auto r = testing::RunHgrasp("run " + scene + " --lockstep --lean --out " + out.string() +
                                           " --at '" + at + "' --command-log " + log.string(),
                                       600);
     EXPECT_EQ(r.status, 1) << r.output;
     logs[i] = ReadText(log.string());
-    report = ReadJson(out / "report.json");
-    twin = ReadJson(out / "twin.json");
-    ASSERT_TRUE(report.is_object()) << r.output;
-    ASSERT_TRUE(twin.is_object()) << r.output;
+    run.report = ReadJson(out / "report.json");
+    run.twin = ReadJson(out / "twin.json");
+    EXPECT_TRUE(run.report.is_object()) << r.output;
+    EXPECT_TRUE(run.twin.is_object()) << r.output;
+    if (!run.report.is_object() || !run.twin.is_object()) return ControlledRun{};
   }
   EXPECT_EQ(logs[0], logs[1]);  // the same every run
+  return run;
+}
+
+// The cameras' streams stopped 1 s into the scan (at a twin time, --at): device_error naming the
+// cameras within 1 s of twin time (the grabber's frame timeout, 0.5 s, and the scan's pace) (the
+// wall-clock run of the same, through GStreamer, is cli_twin_cut_test.cc), exit 1, the same every
+// run.
+void CamerasStoppedDuringTheScan(const std::string& scene, const fs::path& dir, double look_t) {
+  const ControlledRun run =
+      RunTwiceWithControl(scene, dir, "cameras", look_t + 1.0, "stop cameras");
+  const json& report = run.report;
+  const json& twin = run.twin;
+  ASSERT_TRUE(report.is_object() && twin.is_object());
   EXPECT_EQ(report.value("failure", ""), "device_error") << report.dump(1);
   ASSERT_TRUE(report["failed_device"].is_string()) << report.dump(1);
   EXPECT_EQ(report["failed_device"].get<std::string>(), "cameras");
@@ -196,25 +213,10 @@ TEST(CliLockstep, TheRightArmsLinkCutBothWaysDuringTheServoAndTheCamerasStoppedI
   ASSERT_GT(servo_t, 0.0) << "the clean run did not reach the servo";
   ASSERT_GT(moments.look, 0.0) << "the clean run did not look";
   CamerasStoppedDuringTheScan(scene, dir, moments.look);
-  const double cut_t = servo_t + 0.5;
-  char at[64];
-  std::snprintf(at, sizeof at, "%.3f:cut arm_right", cut_t);
-  std::string logs[2];
-  json report, twin;
-  for (int i = 0; i < 2; ++i) {
-    const fs::path out = dir / ("cut" + std::to_string(i));
-    const fs::path log = dir / ("commands" + std::to_string(i) + ".json");
-    const auto r = testing::RunHgrasp("run " + scene + " --lockstep --lean --out " + out.string() +
-                                          " --at '" + at + "' --command-log " + log.string(),
-                                      600);
-    EXPECT_EQ(r.status, 1) << r.output;
-    logs[i] = ReadText(log.string());
-    report = ReadJson(out / "report.json");
-    twin = ReadJson(out / "twin.json");
-    ASSERT_TRUE(report.is_object()) << r.output;
-    ASSERT_TRUE(twin.is_object()) << r.output;
-  }
-  EXPECT_EQ(logs[0], logs[1]);  // the same every run
+  const ControlledRun run = RunTwiceWithControl(scene, dir, "cut", servo_t + 0.5, "cut arm_right");
+  const json& report = run.report;
+  const json& twin = run.twin;
+  ASSERT_TRUE(report.is_object() && twin.is_object());
   EXPECT_EQ(report.value("failure", ""), "device_error") << report.dump(1);
   ASSERT_TRUE(report["failed_device"].is_string()) << report.dump(1);
   EXPECT_EQ(report["failed_device"].get<std::string>(), "arm_right");
