@@ -196,8 +196,8 @@ void GstStereoCamera::Drop(int i) {
   s.pending = nullptr;
 }
 
-Status GstStereoCamera::Grab(device::StereoFrame* frame) {
-  // 1. One frame of each camera, of the same exposure: when both carry frame numbers (buffer
+Status GstStereoCamera::PullPair() {
+  // One frame of each camera, of the same exposure: when both carry frame numbers (buffer
   // offsets), the older is dropped until they match.
   for (int drops = 0;; ++drops) {
     for (int i = 0; i < 2; ++i) {
@@ -212,7 +212,7 @@ Status GstStereoCamera::Grab(device::StereoFrame* frame) {
     const std::optional<std::uint64_t> a = OffsetOf(streams_[0]->pending);
     const std::optional<std::uint64_t> b = OffsetOf(streams_[1]->pending);
     const PairStep step = NextPairStep(a, b, drops, kMaxPairingDrops);
-    if (step == PairStep::kPaired) break;
+    if (step == PairStep::kPaired) return Status::kOk;
     const int older = step == PairStep::kDropLeft    ? 0
                       : step == PairStep::kDropRight ? 1
                                                      : OlderOf(*a, *b);
@@ -223,60 +223,68 @@ Status GstStereoCamera::Grab(device::StereoFrame* frame) {
       return Status::kBadReply;
     }
   }
+}
+
+Status GstStereoCamera::CopyImage(int i, cv::Mat* image) {
+  GstSample* sample = streams_[i]->pending;
+  GstVideoInfo info;
+  GstCaps* caps = gst_sample_get_caps(sample);
+  GstBuffer* buffer = gst_sample_get_buffer(sample);
+  if (caps == nullptr || buffer == nullptr || !gst_video_info_from_caps(&info, caps)) {
+    gchar* text = caps != nullptr ? gst_caps_to_string(caps) : nullptr;
+    last_error_ = Camera(i) + "got a frame with caps '" +
+                  (text != nullptr ? std::string(text) : std::string("none")) +
+                  "'; expected raw video";
+    g_free(text);
+    return Status::kBadReply;
+  }
+  const GstVideoFormat format = GST_VIDEO_INFO_FORMAT(&info);
+  if (info.width != config_.width || info.height != config_.height ||
+      format != GST_VIDEO_FORMAT_BGR) {
+    last_error_ = Camera(i) + "got a " + std::to_string(info.width) + " x " +
+                  std::to_string(info.height) + " " + gst_video_format_to_string(format) +
+                  " frame; expected " + std::to_string(config_.width) + " x " +
+                  std::to_string(config_.height) + " BGR";
+    return Status::kBadReply;
+  }
+  GstVideoFrame video;
+  if (!gst_video_frame_map(&video, &info, buffer, GST_MAP_READ)) {
+    last_error_ = Camera(i) + "a frame's buffer cannot be read (" +
+                  std::to_string(gst_buffer_get_size(buffer)) + " bytes for " +
+                  std::to_string(info.width) + " x " + std::to_string(info.height) + " BGR)";
+    return Status::kBadReply;
+  }
+  // A new buffer for every frame: callers keep frames (the scanner keeps every frame of a
+  // sweep), and cv::Mat copies share data; create() would reuse the last frame's buffer.
+  *image = cv::Mat(config_.height, config_.width, CV_8UC3);
+  const auto* data = static_cast<const std::uint8_t*>(GST_VIDEO_FRAME_PLANE_DATA(&video, 0));
+  const int stride = GST_VIDEO_FRAME_PLANE_STRIDE(&video, 0);
+  const std::size_t row = static_cast<std::size_t>(config_.width) * 3;
+  for (int y = 0; y < config_.height; ++y) {
+    std::memcpy(image->ptr(y), data + static_cast<std::ptrdiff_t>(y) * stride, row);
+  }
+  gst_video_frame_unmap(&video);
+  return Status::kOk;
+}
+
+Status GstStereoCamera::Grab(device::StereoFrame* frame) {
+  // 1. One frame of each camera, of the same exposure.
+  if (const Status s = PullPair(); s != Status::kOk) return s;
 
   // 2. The images, checked and copied out of the samples.
   const double now =
       std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
   if (t0_ < 0.0) t0_ = now;
-  cv::Mat* images[2] = {&frame->left, &frame->right};
-  GstSample* samples[2] = {streams_[0]->pending, streams_[1]->pending};
   for (int i = 0; i < 2; ++i) {
-    GstVideoInfo info;
-    GstCaps* caps = gst_sample_get_caps(samples[i]);
-    GstBuffer* buffer = gst_sample_get_buffer(samples[i]);
-    if (caps == nullptr || buffer == nullptr || !gst_video_info_from_caps(&info, caps)) {
-      gchar* text = caps != nullptr ? gst_caps_to_string(caps) : nullptr;
-      last_error_ = Camera(i) + "got a frame with caps '" +
-                    (text != nullptr ? std::string(text) : std::string("none")) +
-                    "'; expected raw video";
-      g_free(text);
+    const Status s = CopyImage(i, i == 0 ? &frame->left : &frame->right);
+    if (s != Status::kOk) {
       Drop(0);
       Drop(1);
-      return Status::kBadReply;
+      return s;
     }
-    const GstVideoFormat format = GST_VIDEO_INFO_FORMAT(&info);
-    if (info.width != config_.width || info.height != config_.height ||
-        format != GST_VIDEO_FORMAT_BGR) {
-      last_error_ = Camera(i) + "got a " + std::to_string(info.width) + " x " +
-                    std::to_string(info.height) + " " + gst_video_format_to_string(format) +
-                    " frame; expected " + std::to_string(config_.width) + " x " +
-                    std::to_string(config_.height) + " BGR";
-      Drop(0);
-      Drop(1);
-      return Status::kBadReply;
-    }
-    GstVideoFrame video;
-    if (!gst_video_frame_map(&video, &info, buffer, GST_MAP_READ)) {
-      last_error_ = Camera(i) + "a frame's buffer cannot be read (" +
-                    std::to_string(gst_buffer_get_size(buffer)) + " bytes for " +
-                    std::to_string(info.width) + " x " + std::to_string(info.height) + " BGR)";
-      Drop(0);
-      Drop(1);
-      return Status::kBadReply;
-    }
-    // A new buffer for every frame: callers keep frames (the scanner keeps every frame of a
-    // sweep), and cv::Mat copies share data; create() would reuse the last frame's buffer.
-    *images[i] = cv::Mat(config_.height, config_.width, CV_8UC3);
-    const auto* data = static_cast<const std::uint8_t*>(GST_VIDEO_FRAME_PLANE_DATA(&video, 0));
-    const int stride = GST_VIDEO_FRAME_PLANE_STRIDE(&video, 0);
-    const std::size_t row = static_cast<std::size_t>(config_.width) * 3;
-    for (int y = 0; y < config_.height; ++y) {
-      std::memcpy(images[i]->ptr(y), data + static_cast<std::ptrdiff_t>(y) * stride, row);
-    }
-    gst_video_frame_unmap(&video);
   }
-  GstBuffer* left = gst_sample_get_buffer(samples[0]);
-  const std::optional<std::uint64_t> offset = OffsetOf(samples[0]);
+  GstBuffer* left = gst_sample_get_buffer(streams_[0]->pending);
+  const std::optional<std::uint64_t> offset = OffsetOf(streams_[0]->pending);
   frame->t_s = GST_BUFFER_PTS_IS_VALID(left)
                    ? static_cast<double>(GST_BUFFER_PTS(left)) / static_cast<double>(GST_SECOND)
                    : now - t0_;

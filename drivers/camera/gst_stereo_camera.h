@@ -111,6 +111,10 @@ class GstStereoCamera final : public device::StereoCamera {
   device::Status Pull(int i);
   /// Drops camera i's pending sample.
   void Drop(int i);
+  /// Pulls one frame of each camera, of the same exposure (pending in streams_).
+  device::Status PullPair();
+  /// Checks camera i's pending frame (raw BGR of the configured size) and copies it out.
+  device::Status CopyImage(int i, cv::Mat* image);
 
   GstCameraConfig config_;
   LatchSource latch_;

@@ -272,61 +272,76 @@ void SensorHandHand::HandleSample(const DumpSample& d, Clock::TimePoint now) {
   }
 
   if (pending_ && pending_->written) {
-    pending_->since_write.push_back({t, force, d.state});
-    // The echo lost (or late), the state byte tells which setting is in force. The two always
-    // differ in what it shows (Step never changes a speed within a direction without a stop).
-    // A sample that shows only the new one proves it at once if the samples already showed
-    // the old one settled (under it the state stays in its set: idle stays idle, opening or
-    // blocked stays so); else, and to call the command lost, only samples made after the
-    // command must have reached the hand and the fingers settled count.
-    if (force > kContactN) pending_->contact = true;
-    bool shows_new = Consistent(pending_->cmd, ev);
-    bool shows_old = Consistent(pending_->before, ev);
-    const bool late = LateEnough(pending_->t_written);
-    if (shows_new && shows_old && ev == Evidence::kRunning && force > kContactN) {
-      // Blocked pressing an object: only a close speed keeps the pads on it (an open one moves
-      // them off it, and they are blocked only at the open end stop, where nothing presses).
-      // Before the samples are late, the old setting's grip may still show.
-      shows_old = late && pending_->before.close != 0;
-      shows_new = late && pending_->cmd.close != 0;
-    } else if (shows_new && shows_old && ev == Evidence::kRunning) {
-      // Blocked without a force: at an end stop, which a reversal's two settings put at
-      // opposite ends. Where each would have the fingers tells them apart (an open speed lost
-      // at the end stop stays blocked there; the close would have left it long since). A
-      // close speed meets an object the pads touched since shortly before the write: it
-      // would press it again rather than reach 0 (were the object gone meanwhile, neither
-      // setting shows and the command stays unresolved: safe).
-      const double margin = kEndMarginM + prior.uncertainty_m();
-      auto at_its_end = [&](const SpeedSetting& s, double y) {
-        if (s.open != 0) return y >= options_.max_opening_m - margin;
-        return !pending_->contact && y <= margin;
-      };
-      shows_old = at_its_end(pending_->before, prior.opening_m());
-      shows_new = at_its_end(pending_->cmd, Hypothesis(*pending_, t).opening_m());
-    }
-    // Idle (speeds 0) and blocked (a speed set) need no settling: each is impossible under the
-    // other kind of setting.
-    const bool definite = ev == Evidence::kStopped || ev == Evidence::kRunning;
-    if (shows_new && !shows_old && (late || definite || pending_->before_settled)) {
-      ++pending_->votes_new;
-    }
-    if (shows_old && !shows_new && late) ++pending_->votes_old;
-    if (pending_->votes_new >= kVotes && pending_->votes_new >= pending_->votes_old + kVotes) {
-      ++stats_.executed_unechoed;
-      const double t_exec = ToS(pending_->t_write_begin) + options_.latency_s;
-      ResolveExecuted(t_exec, options_.transit_s);
-      known_shown_ = true;  // these very samples showed it
-    } else if (pending_->votes_old >= kVotes && pending_->votes_new == 0) {
-      // Two settled samples still show the old setting and none the new: the command never
-      // arrived whole. Safe to send again.
-      ++stats_.lost;
-      last_lost_ = pending_->cmd;
-      command_log_.Resolve(pending_->logged, false);
-      pending_.reset();
-    }
+    JudgePending(prior, {t, force, d.state}, ev);
     return;
   }
   if (pending_ || ev == Evidence::kNone) return;
+  CheckKnown(ev, t, now);
+}
+
+void SensorHandHand::JudgePending(const sensorhand::OpeningEstimator& prior, const Observation& o,
+                                  Evidence ev) {
+  const double t = o.t_s;
+  const double force = o.force_n;
+  pending_->since_write.push_back(o);
+  // The echo lost (or late), the state byte tells which setting is in force. The two always
+  // differ in what it shows (Step never changes a speed within a direction without a stop).
+  // A sample that shows only the new one proves it at once if the samples already showed
+  // the old one settled (under it the state stays in its set: idle stays idle, opening or
+  // blocked stays so); else, and to call the command lost, only samples made after the
+  // command must have reached the hand and the fingers settled count.
+  if (force > kContactN) pending_->contact = true;
+  bool shows_new = Consistent(pending_->cmd, ev);
+  bool shows_old = Consistent(pending_->before, ev);
+  const bool late = LateEnough(pending_->t_written);
+  if (shows_new && shows_old && ev == Evidence::kRunning && force > kContactN) {
+    // Blocked pressing an object: only a close speed keeps the pads on it (an open one moves
+    // them off it, and they are blocked only at the open end stop, where nothing presses).
+    // Before the samples are late, the old setting's grip may still show.
+    shows_old = late && pending_->before.close != 0;
+    shows_new = late && pending_->cmd.close != 0;
+  } else if (shows_new && shows_old && ev == Evidence::kRunning) {
+    // Blocked without a force: at an end stop, which a reversal's two settings put at
+    // opposite ends. Where each would have the fingers tells them apart (an open speed lost
+    // at the end stop stays blocked there; the close would have left it long since). A
+    // close speed meets an object the pads touched since shortly before the write: it
+    // would press it again rather than reach 0 (were the object gone meanwhile, neither
+    // setting shows and the command stays unresolved: safe).
+    const double margin = kEndMarginM + prior.uncertainty_m();
+    auto at_its_end = [&](const SpeedSetting& s, double y) {
+      if (s.open != 0) return y >= options_.max_opening_m - margin;
+      return !pending_->contact && y <= margin;
+    };
+    shows_old = at_its_end(pending_->before, prior.opening_m());
+    shows_new = at_its_end(pending_->cmd, Hypothesis(*pending_, t).opening_m());
+  }
+  CountVote(shows_new, shows_old, late, ev);
+}
+
+void SensorHandHand::CountVote(bool shows_new, bool shows_old, bool late, Evidence ev) {
+  // Idle (speeds 0) and blocked (a speed set) need no settling: each is impossible under the
+  // other kind of setting.
+  const bool definite = ev == Evidence::kStopped || ev == Evidence::kRunning;
+  if (shows_new && !shows_old && (late || definite || pending_->before_settled)) {
+    ++pending_->votes_new;
+  }
+  if (shows_old && !shows_new && late) ++pending_->votes_old;
+  if (pending_->votes_new >= kVotes && pending_->votes_new >= pending_->votes_old + kVotes) {
+    ++stats_.executed_unechoed;
+    const double t_exec = ToS(pending_->t_write_begin) + options_.latency_s;
+    ResolveExecuted(t_exec, options_.transit_s);
+    known_shown_ = true;  // these very samples showed it
+  } else if (pending_->votes_old >= kVotes && pending_->votes_new == 0) {
+    // Two settled samples still show the old setting and none the new: the command never
+    // arrived whole. Safe to send again.
+    ++stats_.lost;
+    last_lost_ = pending_->cmd;
+    command_log_.Resolve(pending_->logged, false);
+    pending_.reset();
+  }
+}
+
+void SensorHandHand::CheckKnown(Evidence ev, double t, Clock::TimePoint now) {
   if (Consistent(known_, ev)) {
     // Samples read after the command was resolved were made after it took effect (the hand
     // finishes a frame before it answers a command): from now on the state stays in this set.
@@ -484,122 +499,133 @@ double SensorHandHand::StopLead(double speed) const {
 
 SpeedSetting SensorHandHand::Control(Clock::TimePoint now) {
   if (goal_.done) return sensorhand::kStop;
-  const DumpSample& s = history_.back().d;
-  const double force = sensorhand::ForceN(s.f_bracket);
+  const double force = sensorhand::ForceN(history_.back().d.f_bracket);
   switch (goal_.kind) {
     case GoalKind::kHold:
       goal_.done = true;
       return sensorhand::kStop;
-
-    case GoalKind::kClose: {
-      const double step =
-          options_.full_force_n / (sensorhand::kSpeedMax - sensorhand::kSpeedMin + 1);
-      if (goal_.backing_off || force > goal_.force_n + step) {
-        // Pressing harder than asked (a stronger grip before): ease off slowly down to it.
-        goal_.backing_off = true;
-        if (force > goal_.force_n) return {slow_byte_, 0};
-        goal_.done = true;
-        return sensorhand::kStop;
-      }
-      if (force >= goal_.force_n || (known_.close != 0 && (Blocked() || ForceSettled()))) {
-        // At the force limit, stalled on the object, or the fingers meet (blocked without a
-        // force): speed 0 holds the grip (the gear does not back-drive).
-        goal_.done = true;
-        return sensorhand::kStop;
-      }
-      return {0, goal_.close_byte};
-    }
-
-    case GoalKind::kOpen: {
-      // The estimate when a command decided now takes effect (half a poll early on average).
-      sensorhand::OpeningEstimator ahead = estimator_;
-      ahead.AdvanceTo(ToS(now) + options_.latency_s + 0.5 * kPollS);
-      const double e = goal_.opening_m - ahead.opening_m();
-      const double tol = options_.opening_tolerance_m;
-      const double slow_zone = StopLead(options_.full_speed_m_s) + 0.004;
-      // The lightest touch the hand keeps on an object it met: the slow speed's stall force.
-      const double light_n = options_.full_force_n * sensorhand::SpeedFraction(slow_byte_);
-      auto toward = [&](int dir, double distance) -> SpeedSetting {
-        const std::uint8_t b = distance > slow_zone ? sensorhand::kSpeedMax : slow_byte_;
-        return dir > 0 ? SpeedSetting{b, 0} : SpeedSetting{0, b};
-      };
-      if (estimator_.lost() && !goal_.homing) goal_.homing = true;
-      if (goal_.homing) {
-        if (!estimator_.lost()) {
-          // Fixed at the end stop: stop there, then on to the target from a known opening.
-          goal_.homing = false;
-          goal_.last_dir = 0;
-          goal_.reversals = 0;
-          goal_.at_object = false;
-          return sensorhand::kStop;
-        }
-        if (known_.open != 0) return known_;  // until the stream shows it blocked
-        if (!known_.stopped() || Moving()) return sensorhand::kStop;
-        return {sensorhand::kSpeedMax, 0};
-      }
-      if (known_.stopped()) {
-        if (Moving()) return sensorhand::kStop;  // let the fingers settle, then judge
-        if (goal_.contact) {
-          // Stopped on the object: ease a harder press off to a light touch first.
-          if (force > light_n) return {slow_byte_, 0};
-          goal_.contact = false;
-        }
-        if (goal_.to_end) {
-          // Into the end stop, whatever the estimate says, until the stream shows it blocked
-          // (or an object stops the fingers on the way to 0). Stopped again after a move the
-          // hand took: there. Stopped because the move was lost on the line: send it again.
-          if (goal_.moved) {
-            goal_.done = true;
-            return sensorhand::kStop;
-          }
-          const int dir = goal_.opening_m > 0.0 ? 1 : -1;
-          goal_.last_dir = dir;
-          return toward(dir, std::abs(e));
-        }
-        if (std::abs(e) <= tol || (e < 0.0 && goal_.at_object)) {
-          // There, or the target lies behind the object the pads met.
-          goal_.done = true;
-          return sensorhand::kStop;
-        }
-        const int dir = e > 0.0 ? 1 : -1;
-        if (goal_.last_dir != 0 && dir != goal_.last_dir && ++goal_.reversals > kMaxReversals) {
-          goal_.done = true;  // hunting: give up
-          return sensorhand::kStop;
-        }
-        goal_.last_dir = dir;
-        return toward(dir, std::abs(e));
-      }
-      const int dir = known_.open != 0 ? 1 : -1;
-      if (goal_.contact) {
-        // Easing off the object: stop at a light touch.
-        if (dir > 0 && force > light_n) return known_;
-        goal_.contact = false;
-        return sensorhand::kStop;
-      }
-      goal_.moved = true;
-      if (dir < 0 && force > kContactN) {
-        // Closing onto an object: stop at the contact (then ease off, and go on only if the
-        // target lies the other way).
-        goal_.contact = true;
-        goal_.at_object = true;
-        return sensorhand::kStop;
-      }
-      if (Blocked()) {
-        // Blocked: at an end stop (the estimate is fixed there). A move into it is done. A move
-        // to a target short of it had its stop lost on the line (in a dropout, say) and ran on:
-        // it goes on from the known opening once the fingers are stopped (the turn back counts
-        // against hunting). Taken as done, the move ended with the hand shut where the plan
-        // wanted it 81 mm open (fault seed 28 of the whole run through the twin's noisy lines).
-        if (goal_.to_end) goal_.done = true;
-        return sensorhand::kStop;
-      }
-      if (goal_.to_end) return known_;
-      // Stop when the fingers, stopped now, would come to rest at the target or beyond.
-      if (dir * (goal_.opening_m - ahead.RestOpening()) <= 0.0) return sensorhand::kStop;
-      return known_;
-    }
+    case GoalKind::kClose:
+      return ControlClose(force);
+    case GoalKind::kOpen:
+      return ControlOpen(now, force);
   }
   return sensorhand::kStop;
+}
+
+SpeedSetting SensorHandHand::ControlClose(double force) {
+  const double step = options_.full_force_n / (sensorhand::kSpeedMax - sensorhand::kSpeedMin + 1);
+  if (goal_.backing_off || force > goal_.force_n + step) {
+    // Pressing harder than asked (a stronger grip before): ease off slowly down to it.
+    goal_.backing_off = true;
+    if (force > goal_.force_n) return {slow_byte_, 0};
+    goal_.done = true;
+    return sensorhand::kStop;
+  }
+  if (force >= goal_.force_n || (known_.close != 0 && (Blocked() || ForceSettled()))) {
+    // At the force limit, stalled on the object, or the fingers meet (blocked without a
+    // force): speed 0 holds the grip (the gear does not back-drive).
+    goal_.done = true;
+    return sensorhand::kStop;
+  }
+  return {0, goal_.close_byte};
+}
+
+SpeedSetting SensorHandHand::ControlOpen(Clock::TimePoint now, double force) {
+  if (estimator_.lost() && !goal_.homing) goal_.homing = true;
+  if (goal_.homing) return Homing();
+  // The estimate when a command decided now takes effect (half a poll early on average).
+  sensorhand::OpeningEstimator ahead = estimator_;
+  ahead.AdvanceTo(ToS(now) + options_.latency_s + 0.5 * kPollS);
+  if (known_.stopped()) return OpenFromRest(goal_.opening_m - ahead.opening_m(), force);
+  return OpenOnTheWay(ahead, force);
+}
+
+SpeedSetting SensorHandHand::Homing() {
+  if (!estimator_.lost()) {
+    // Fixed at the end stop: stop there, then on to the target from a known opening.
+    goal_.homing = false;
+    goal_.last_dir = 0;
+    goal_.reversals = 0;
+    goal_.at_object = false;
+    return sensorhand::kStop;
+  }
+  if (known_.open != 0) return known_;  // until the stream shows it blocked
+  if (!known_.stopped() || Moving()) return sensorhand::kStop;
+  return {sensorhand::kSpeedMax, 0};
+}
+
+double SensorHandHand::LightTouchN() const {
+  return options_.full_force_n * sensorhand::SpeedFraction(slow_byte_);
+}
+
+SpeedSetting SensorHandHand::Toward(int dir, double distance) const {
+  const double slow_zone = StopLead(options_.full_speed_m_s) + 0.004;
+  const std::uint8_t b = distance > slow_zone ? sensorhand::kSpeedMax : slow_byte_;
+  return dir > 0 ? SpeedSetting{b, 0} : SpeedSetting{0, b};
+}
+
+SpeedSetting SensorHandHand::OpenFromRest(double e, double force) {
+  if (Moving()) return sensorhand::kStop;  // let the fingers settle, then judge
+  if (goal_.contact) {
+    // Stopped on the object: ease a harder press off to a light touch first.
+    if (force > LightTouchN()) return {slow_byte_, 0};
+    goal_.contact = false;
+  }
+  if (goal_.to_end) {
+    // Into the end stop, whatever the estimate says, until the stream shows it blocked
+    // (or an object stops the fingers on the way to 0). Stopped again after a move the
+    // hand took: there. Stopped because the move was lost on the line: send it again.
+    if (goal_.moved) {
+      goal_.done = true;
+      return sensorhand::kStop;
+    }
+    const int dir = goal_.opening_m > 0.0 ? 1 : -1;
+    goal_.last_dir = dir;
+    return Toward(dir, std::abs(e));
+  }
+  if (std::abs(e) <= options_.opening_tolerance_m || (e < 0.0 && goal_.at_object)) {
+    // There, or the target lies behind the object the pads met.
+    goal_.done = true;
+    return sensorhand::kStop;
+  }
+  const int dir = e > 0.0 ? 1 : -1;
+  if (goal_.last_dir != 0 && dir != goal_.last_dir && ++goal_.reversals > kMaxReversals) {
+    goal_.done = true;  // hunting: give up
+    return sensorhand::kStop;
+  }
+  goal_.last_dir = dir;
+  return Toward(dir, std::abs(e));
+}
+
+SpeedSetting SensorHandHand::OpenOnTheWay(const sensorhand::OpeningEstimator& ahead, double force) {
+  const int dir = known_.open != 0 ? 1 : -1;
+  if (goal_.contact) {
+    // Easing off the object: stop at a light touch.
+    if (dir > 0 && force > LightTouchN()) return known_;
+    goal_.contact = false;
+    return sensorhand::kStop;
+  }
+  goal_.moved = true;
+  if (dir < 0 && force > kContactN) {
+    // Closing onto an object: stop at the contact (then ease off, and go on only if the
+    // target lies the other way).
+    goal_.contact = true;
+    goal_.at_object = true;
+    return sensorhand::kStop;
+  }
+  if (Blocked()) {
+    // Blocked: at an end stop (the estimate is fixed there). A move into it is done. A move
+    // to a target short of it had its stop lost on the line (in a dropout, say) and ran on:
+    // it goes on from the known opening once the fingers are stopped (the turn back counts
+    // against hunting). Taken as done, the move ended with the hand shut where the plan
+    // wanted it 81 mm open (fault seed 28 of the whole run through the twin's noisy lines).
+    if (goal_.to_end) goal_.done = true;
+    return sensorhand::kStop;
+  }
+  if (goal_.to_end) return known_;
+  // Stop when the fingers, stopped now, would come to rest at the target or beyond.
+  if (dir * (goal_.opening_m - ahead.RestOpening()) <= 0.0) return sensorhand::kStop;
+  return known_;
 }
 
 bool SensorHandHand::Blocked() const {

@@ -99,34 +99,34 @@ struct SensorHandOptions {
 
 /// The driver's opening estimate (OpeningEstimator) at the newest sample.
 struct SensorHandEstimate {
-  double t_s = 0.0;             ///< the driver's clock (s), as HandState::t_s
-  double opening_m = 0.0;       ///< estimated pad distance (m)
-  double velocity_m_s = 0.0;    ///< estimated rate (m/s)
-  double uncertainty_m = 0.0;   ///< bound on the estimate's error (m), 0 right at an end stop
-  bool referenced = false;      ///< an end stop has fixed the estimate since the start
-  bool lost = false;            ///< closed onto an object unseen (a dropout): Open homes first
-  int fixes = 0;                ///< end-stop fixes so far
-  double last_correction_m = 0.0;     ///< the last fix's correction (m, true - estimate)
+  double t_s = 0.0;                ///< the driver's clock (s), as HandState::t_s
+  double opening_m = 0.0;          ///< estimated pad distance (m)
+  double velocity_m_s = 0.0;       ///< estimated rate (m/s)
+  double uncertainty_m = 0.0;      ///< bound on the estimate's error (m), 0 right at an end stop
+  bool referenced = false;         ///< an end stop has fixed the estimate since the start
+  bool lost = false;               ///< closed onto an object unseen (a dropout): Open homes first
+  int fixes = 0;                   ///< end-stop fixes so far
+  double last_correction_m = 0.0;  ///< the last fix's correction (m, true - estimate)
   double max_abs_correction_m = 0.0;  ///< the largest |correction| so far (m)
 };
 
 /// Counters of the link's behaviour since the driver was made.
 struct SensorHandStats {
-  std::uint64_t samples = 0;          ///< stream frames received
-  std::uint64_t echoes = 0;           ///< command echoes received
-  std::uint64_t stray_echoes = 0;     ///< of which matched no command in flight
-  std::uint64_t discarded_bytes = 0;  ///< bytes thrown away while resynchronising
-  std::uint64_t commands = 0;         ///< speed commands written (first sends and re-sends)
-  std::uint64_t executed = 0;         ///< of which seen executed (by echo or by the stream)
+  std::uint64_t samples = 0;            ///< stream frames received
+  std::uint64_t echoes = 0;             ///< command echoes received
+  std::uint64_t stray_echoes = 0;       ///< of which matched no command in flight
+  std::uint64_t discarded_bytes = 0;    ///< bytes thrown away while resynchronising
+  std::uint64_t commands = 0;           ///< speed commands written (first sends and re-sends)
+  std::uint64_t executed = 0;           ///< of which seen executed (by echo or by the stream)
   std::uint64_t executed_unechoed = 0;  ///< of which executed, echo lost: told by the stream
-  std::uint64_t lost = 0;             ///< of which seen not executed (dropped, damaged)
-  std::uint64_t unresolved = 0;       ///< of which never told either way (unresolved_s)
-  std::uint64_t resends = 0;          ///< a lost command sent again
-  std::uint64_t stops_inserted = 0;   ///< a stop sent between two speeds of one direction
-  std::uint64_t stream_starts = 0;    ///< 0x73 written to restart a silent stream
-  std::uint64_t anomalies = 0;        ///< the stream contradicted the setting (a reset, ...)
-  std::uint64_t failures = 0;         ///< seam calls that returned a failure status
-  double echo_delay_mean_s = 0.0;     ///< from writing a command to reading its echo (s)
+  std::uint64_t lost = 0;               ///< of which seen not executed (dropped, damaged)
+  std::uint64_t unresolved = 0;         ///< of which never told either way (unresolved_s)
+  std::uint64_t resends = 0;            ///< a lost command sent again
+  std::uint64_t stops_inserted = 0;     ///< a stop sent between two speeds of one direction
+  std::uint64_t stream_starts = 0;      ///< 0x73 written to restart a silent stream
+  std::uint64_t anomalies = 0;          ///< the stream contradicted the setting (a reset, ...)
+  std::uint64_t failures = 0;           ///< seam calls that returned a failure status
+  double echo_delay_mean_s = 0.0;       ///< from writing a command to reading its echo (s)
   double echo_delay_max_s = 0.0;
 };
 
@@ -145,8 +145,8 @@ class SensorHandHand final : public device::Hand {
   SensorHandHand& operator=(const SensorHandHand&) = delete;
 
   /// The latest stream sample: the estimated opening (estimate() says how good it is), the grip
-  /// force (bracket force), moving (the fingers move or a goal is under way). t_s: the driver's clock
-  /// (s) when the sample arrived. Waits up to call_timeout_s for a sample when the stream is
+  /// force (bracket force), moving (the fingers move or a goal is under way). t_s: the driver's
+  /// clock (s) when the sample arrived. Waits up to call_timeout_s for a sample when the stream is
   /// silent.
   device::Status Read(device::HandState* state) override;
   /// Starts moving the fingers to `opening_m` (clamped to 0..max_opening_m) and returns when
@@ -220,7 +220,7 @@ class SensorHandHand final : public device::Hand {
     sensorhand::OpeningEstimator at_write;  ///< the estimate as the command was written
     std::vector<Observation> since_write;   ///< samples since, to replay once it is resolved
     int votes_new = 0, votes_old = 0;       ///< samples that show either setting
-    bool before_settled = false;  ///< the newest sample before it already showed `before`
+    bool before_settled = false;            ///< the newest sample before it already showed `before`
     /// The pads pressed an object (a grip force) since kContactMemoryS before the write.
     bool contact = false;
     std::uint64_t goal_id = 0;
@@ -238,6 +238,13 @@ class SensorHandHand final : public device::Hand {
   bool ReadOnce(double timeout_s);
   void HandleReply(const sensorhand::Reply& r, Clock::TimePoint now);
   void HandleSample(const sensorhand::DumpSample& d, Clock::TimePoint now);
+  /// A sample while a written command is unresolved: a vote for the new setting or the old
+  /// one, judged against `prior` (the estimate under the old).
+  void JudgePending(const sensorhand::OpeningEstimator& prior, const Observation& o, Evidence ev);
+  /// Counts a sample's vote; enough of them resolve the pending command executed or lost.
+  void CountVote(bool shows_new, bool shows_old, bool late, Evidence ev);
+  /// No command pending: a stream that keeps contradicting the known setting is an anomaly.
+  void CheckKnown(Evidence ev, double t, Clock::TimePoint now);
   /// The estimate at t_s (estimator time) had the pending command taken effect latency_s after
   /// its write, from the samples' forces since.
   sensorhand::OpeningEstimator Hypothesis(const Pending& p, double t_s) const;
@@ -247,6 +254,19 @@ class SensorHandHand final : public device::Hand {
   void Step(Clock::TimePoint now, std::vector<std::uint8_t>* out);
   /// The speed setting the current goal wants now; may mark it done.
   sensorhand::SpeedSetting Control(Clock::TimePoint now);
+  sensorhand::SpeedSetting ControlClose(double force);
+  sensorhand::SpeedSetting ControlOpen(Clock::TimePoint now, double force);
+  /// The estimate lost: into the open end stop, which fixes it.
+  sensorhand::SpeedSetting Homing();
+  /// kOpen with the fingers stopped: e is the target less the opening when a command takes
+  /// effect.
+  sensorhand::SpeedSetting OpenFromRest(double e, double force);
+  /// kOpen with a speed set: go on, or stop where the fingers would come to rest on the target.
+  sensorhand::SpeedSetting OpenOnTheWay(const sensorhand::OpeningEstimator& ahead, double force);
+  /// Full speed towards dir (+1 open, -1 close), slow within stopping reach of the target.
+  sensorhand::SpeedSetting Toward(int dir, double distance) const;
+  /// The lightest touch the hand keeps on an object it met: the slow speed's stall force.
+  double LightTouchN() const;
   /// Whether the newest sample shows the fingers blocked under the current setting.
   bool Blocked() const;
   /// Whether the grip force has stopped rising under the current close setting.
@@ -285,11 +305,11 @@ class SensorHandHand final : public device::Hand {
   Clock::TimePoint last_empty_t_{};  ///< the last read that found nothing began then
   Clock::TimePoint last_sample_t_{};
   Clock::TimePoint last_stream_start_{};
-  sensorhand::SpeedSetting known_;       ///< the hand's setting, as last known
-  Clock::TimePoint known_since_{};      ///< when it was written (it took effect after)
-  Clock::TimePoint known_resolved_t_{};  ///< the newest sample when the driver learnt it
+  sensorhand::SpeedSetting known_;        ///< the hand's setting, as last known
+  Clock::TimePoint known_since_{};        ///< when it was written (it took effect after)
+  Clock::TimePoint known_resolved_t_{};   ///< the newest sample when the driver learnt it
   std::uint64_t known_since_sample_ = 0;  ///< samples_ then
-  bool setting_known_ = false;  ///< the first sample has told whether the hand is still
+  bool setting_known_ = false;            ///< the first sample has told whether the hand is still
   bool known_shown_ = false;    ///< a settled sample has shown known_ since it took effect
   bool resend_anyway_ = false;  ///< send the next setting even if it equals known_
   int contradictions_ = 0;      ///< late samples in a row that contradict known_
