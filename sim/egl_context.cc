@@ -12,6 +12,20 @@
 namespace hgrasp::sim {
 namespace {
 
+// Mesa's software renderer (llvmpipe) rasterises on a thread per core by default. The twin's
+// frames are 320 x 240 and its scenes run beside each other (a sweep's jobs, ctest -j2): on this
+// project's 2-core machine the threads' hand-offs cost more than they save. Measured on the
+// default scenario (`hgrasp run --no-video`, two runs each, 2026-12-08): with a thread per core
+// 10.0-10.4 s wall and 12.2-12.7 s of CPU; with one worker thread (LP_NUM_THREADS=1) 10.7-10.9 s
+// and 11.1 s; in the calling thread (LP_NUM_THREADS=0) 9.0-9.2 s and 9.1-9.3 s. A colour-only
+// stereo frame 15.0 -> 13.4 ms, a full one 108 -> 113 ms; the images are the same bytes. So the
+// rendering stays in the thread that asks for it unless the environment says otherwise. Set
+// before main (no thread yet to race the environment); a GPU's driver never reads it.
+const bool kLlvmpipeInCallingThread = [] {
+  ::setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
+  return true;
+}();
+
 [[noreturn]] void Fail(const char* what) {
   char buf[160];
   std::snprintf(buf, sizeof buf, "EGL: %s failed (error 0x%04x)", what, eglGetError());

@@ -4,6 +4,8 @@
 /// On a machine with a GPU, the first EGL device that is not Mesa's software device is used; on a
 /// machine without one, Mesa's surfaceless platform (llvmpipe). EGL_PLATFORM=surfaceless and
 /// HGRASP_EGL_DEVICE=software force the software path.
+/// llvmpipe renders in the calling thread (LP_NUM_THREADS=0) unless the environment sets
+/// LP_NUM_THREADS: see egl_context.cc for why.
 
 #include <string>
 

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -265,6 +267,28 @@ objects:
   std::printf("culling: %.1f of %d geoms left out per render on average\n",
               static_cast<double>(culled) / renders, m->ngeom);
   EXPECT_GT(culled, 10 * renders);  // most of the robot is out of view
+}
+
+// Mesa's software renderer works in the thread that renders (LP_NUM_THREADS=0, set by
+// egl_context.cc unless the environment sets it): no rasteriser threads beside it.
+TEST(RenderColorTest, TheSoftwareRendererMakesNoThreadsOfItsOwn) {
+  const char* preset = std::getenv("LP_NUM_THREADS");
+  ASSERT_NE(preset, nullptr);
+  World world(ScenarioFromYaml(testing::kEmptyScene));
+  StereoRig rig(&world);
+  rig.Expose(0);
+  if (rig.renderer().DeviceDescription().find("llvmpipe") == std::string::npos) {
+    GTEST_SKIP() << "not Mesa's software renderer: " << rig.renderer().DeviceDescription();
+  }
+  int llvmpipe_threads = 0;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string name;
+    std::getline(comm, name);
+    llvmpipe_threads += name.rfind("llvmpipe", 0) == 0;
+  }
+  EXPECT_STREQ(preset, "0");
+  EXPECT_EQ(llvmpipe_threads, 0);
 }
 
 }  // namespace
