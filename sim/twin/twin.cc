@@ -28,6 +28,36 @@ json PoseJson(const Pose3& X) {
   return {{"p", {X.translation().x(), X.translation().y(), X.translation().z()}}, {"R", R}};
 }
 
+// What an emulator ran, in its own terms (and the lines VAL refused, with their messages: a
+// driver that lost a message would have taken the line as run), with the twin times.
+void EmulatorLog(const drivers::DeviceEmulator& d, json* log, json* log_t, json* refused) {
+  if (const auto* v = dynamic_cast<const drivers::Val2Emulator*>(&d)) {
+    for (const auto& e : v->executed()) {
+      log->push_back(e.line);
+      log_t->push_back(e.t_s);
+    }
+    for (const auto& [line, error] : v->refused()) {
+      refused->push_back({{"line", line}, {"error", error}});
+    }
+  } else if (const auto* h = dynamic_cast<const drivers::SensorHandEmulator*>(&d)) {
+    for (const auto& e : h->log()) {
+      log->push_back(drivers::HexBytes(drivers::sensorhand::Encode(e.command)));
+      log_t->push_back(e.t_s);
+    }
+  } else if (const auto* b = dynamic_cast<const drivers::BiclopsEmulator*>(&d)) {
+    for (const auto& e : b->executed()) {
+      log->push_back({{"axis", e.axis}, {"opcode", e.opcode}, {"value", e.value}});
+      log_t->push_back(e.t_s);
+    }
+  } else if (const auto* lb = dynamic_cast<const drivers::LaserBoardEmulator*>(&d)) {
+    for (const auto& e : lb->log()) {
+      log->push_back(drivers::HexBytes(drivers::laser_board::CommandPayload(e.command)) + "/" +
+                     std::to_string(static_cast<int>(drivers::laser_board::CodeOf(e.command))));
+      log_t->push_back(e.t_s);
+    }
+  }
+}
+
 }  // namespace
 
 Twin::Twin(Scenario scenario, const TwinOptions& options, FrameSink sink)
@@ -434,41 +464,12 @@ TwinFrameCounts Twin::frame_counts() const {
   return frames_;
 }
 
-json Twin::Report() const {
-  const TwinFrameCounts frames_ = frame_counts();
-  json lines = json::object(), commands = json::object(), times = json::object();
+json Twin::LinesReport(json* commands, json* times) const {
+  json lines = json::object();
   for (const auto& l : lines_) {
     const drivers::FaultCounts f = l->fault_counts();
-    json log = json::array(), log_t = json::array();
-    const drivers::DeviceEmulator& d = l->device();
-    json refused = json::array();
-    if (const auto* v = dynamic_cast<const drivers::Val2Emulator*>(&d)) {
-      for (const auto& e : v->executed()) {
-        log.push_back(e.line);
-        log_t.push_back(e.t_s);
-      }
-      // The lines VAL ran and refused (with its message): a driver that lost the message
-      // would have taken them as run.
-      for (const auto& [line, error] : v->refused()) {
-        refused.push_back({{"line", line}, {"error", error}});
-      }
-    } else if (const auto* h = dynamic_cast<const drivers::SensorHandEmulator*>(&d)) {
-      for (const auto& e : h->log()) {
-        log.push_back(drivers::HexBytes(drivers::sensorhand::Encode(e.command)));
-        log_t.push_back(e.t_s);
-      }
-    } else if (const auto* b = dynamic_cast<const drivers::BiclopsEmulator*>(&d)) {
-      for (const auto& e : b->executed()) {
-        log.push_back({{"axis", e.axis}, {"opcode", e.opcode}, {"value", e.value}});
-        log_t.push_back(e.t_s);
-      }
-    } else if (const auto* lb = dynamic_cast<const drivers::LaserBoardEmulator*>(&d)) {
-      for (const auto& e : lb->log()) {
-        log.push_back(drivers::HexBytes(drivers::laser_board::CommandPayload(e.command)) + "/" +
-                      std::to_string(static_cast<int>(drivers::laser_board::CodeOf(e.command))));
-        log_t.push_back(e.t_s);
-      }
-    }
+    json log = json::array(), log_t = json::array(), refused = json::array();
+    EmulatorLog(l->device(), &log, &log_t, &refused);
     lines[l->key()] = {{"port", l->port()},
                        {"baud", l->baud()},
                        {"bytes_from_host", l->bytes_from_host()},
@@ -482,9 +483,13 @@ json Twin::Report() const {
                          {"dropped", f.dropped},
                          {"dropouts", f.dropouts}}}};
     if (!refused.empty()) lines[l->key()]["refused"] = std::move(refused);
-    commands[l->key()] = std::move(log);
-    times[l->key()] = std::move(log_t);
+    (*commands)[l->key()] = std::move(log);
+    (*times)[l->key()] = std::move(log_t);
   }
+  return lines;
+}
+
+json Twin::HandTruth() const {
   json grips = json::array();
   for (const TwinGrip& g : grips_) {
     json j = PoseJson(g.X_WE);
@@ -503,6 +508,11 @@ json Twin::Report() const {
                            {"force_n", e.force_n},
                            {"objects", objects}});
   }
+  return {{"grips", grips}, {"hand_events", hand_events}};
+}
+
+json Twin::Truth() const {
+  json truth = HandTruth();
   json boxes = json::array();
   for (const SimObject& o : world_->objects()) {
     const Pose3 now = world_->BodyPose(o.body);
@@ -512,6 +522,28 @@ json Twin::Report() const {
                      {"now", PoseJson(now)},
                      {"rise_m", now.translation().z() - start.translation().z()}});
   }
+  truth["boxes"] = boxes;
+  truth["head_rad"] = {world_->JointPosition("head_pan"), world_->JointPosition("head_tilt"),
+                       world_->JointPosition("head_verge_left")};
+  truth["laser_count"] = board_->EncoderCount();
+  truth["laser_on"] = world_->laser_on();
+  auto arm = [&](int i, const char* gripper) -> json {
+    return {{"last_moving_t_s", arm_last_moving_s_[i]},
+            {"X_WE", PoseJson(world_->BodyPose(world_->Id(mjOBJ_BODY, gripper)))}};
+  };
+  truth["arms"] = {{"left", arm(0, "left_gripper")}, {"right", arm(1, "right_gripper")}};
+  truth["leds"] = {{"left", board_->LedMask(0)}, {"right", board_->LedMask(1)}};
+  auto hand = [&](int i) -> json {
+    return {{"opening_m", hands_[i]->opening_m()}, {"force_n", hands_[i]->grip_force_n()}};
+  };
+  truth["hands"] = {{"left", hand(0)}, {"right", hand(1)}};
+  return truth;
+}
+
+json Twin::Report() const {
+  const TwinFrameCounts frames = frame_counts();
+  json commands = json::object(), times = json::object();
+  const json lines = LinesReport(&commands, &times);
   // Every exposure: [frame, twin time (s), encoder count latched, laser on, rendered].
   json exposures = json::array();
   for (const TwinExposure& e : exposures_) {
@@ -519,45 +551,24 @@ json Twin::Report() const {
   }
   json controls = json::array();
   for (const auto& [t, c] : controls_) controls.push_back({{"t_s", t}, {"command", c}});
-  return {
-      {"scenario", scenario_.name},
-      {"t0_s", t0_},
-      {"controls", controls},
-      {"exposures", exposures},
-      {"rate", options_.rate},
-      {"lockstep", options_.lockstep != nullptr},
-      {"twin_s", world_->time() - t0_},
-      {"frames",
-       {{"exposures", frames_.exposures},
-        {"rendered", frames_.rendered},
-        {"overruns", frames_.overruns},
-        {"mean_render_ms", frames_.rendered ? 1e3 * frames_.render_s / frames_.rendered : 0.0},
-        {"max_render_ms", 1e3 * frames_.max_render_s},
-        {"max_lag_ms", 1e3 * frames_.max_lag_s}}},
-      {"lines", lines},
-      {"truth",
-       {{"grips", grips},
-        {"hand_events", hand_events},
-        {"boxes", boxes},
-        {"head_rad",
-         {world_->JointPosition("head_pan"), world_->JointPosition("head_tilt"),
-          world_->JointPosition("head_verge_left")}},
-        {"laser_count", board_->EncoderCount()},
-        {"laser_on", world_->laser_on()},
-        {"arms",
-         {{"left",
-           {{"last_moving_t_s", arm_last_moving_s_[0]},
-            {"X_WE", PoseJson(world_->BodyPose(world_->Id(mjOBJ_BODY, "left_gripper")))}}},
-          {"right",
-           {{"last_moving_t_s", arm_last_moving_s_[1]},
-            {"X_WE", PoseJson(world_->BodyPose(world_->Id(mjOBJ_BODY, "right_gripper")))}}}}},
-        {"leds", {{"left", board_->LedMask(0)}, {"right", board_->LedMask(1)}}},
-        {"hands",
-         {{"left", {{"opening_m", hands_[0]->opening_m()}, {"force_n", hands_[0]->grip_force_n()}}},
-          {"right",
-           {{"opening_m", hands_[1]->opening_m()}, {"force_n", hands_[1]->grip_force_n()}}}}}}},
-      {"commands", commands},
-      {"command_times_s", times}};
+  return {{"scenario", scenario_.name},
+          {"t0_s", t0_},
+          {"controls", controls},
+          {"exposures", exposures},
+          {"rate", options_.rate},
+          {"lockstep", options_.lockstep != nullptr},
+          {"twin_s", world_->time() - t0_},
+          {"frames",
+           {{"exposures", frames.exposures},
+            {"rendered", frames.rendered},
+            {"overruns", frames.overruns},
+            {"mean_render_ms", frames.rendered ? 1e3 * frames.render_s / frames.rendered : 0.0},
+            {"max_render_ms", 1e3 * frames.max_render_s},
+            {"max_lag_ms", 1e3 * frames.max_lag_s}}},
+          {"lines", lines},
+          {"truth", Truth()},
+          {"commands", commands},
+          {"command_times_s", times}};
 }
 
 }  // namespace hgrasp::sim

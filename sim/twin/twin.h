@@ -175,6 +175,12 @@ class Twin {
   nlohmann::json Report() const;
 
  private:
+  /// Report's "lines" (each line's counts and faults); each emulator's log into commands, its
+  /// twin times into times, keyed by line.
+  nlohmann::json LinesReport(nlohmann::json* commands, nlohmann::json* times) const;
+  /// Report's "truth": grips, hand events, boxes, head, laser, arms, LEDs and hands now.
+  nlohmann::json Truth() const;
+  nlohmann::json HandTruth() const;  ///< the grips and hand events of Truth
   void StepPhysics(double dt);
   void Expose(double late_s);
   void WatchHands();
